@@ -1,0 +1,19 @@
+"""clsolid: solid textures grown from a 2D exemplar, on OpenCL.
+
+Importing clsolid does not touch OpenCL; a device is chosen when a synthesis runs
+(:func:`select_device`, the ``device=`` argument, ``$CLSOLID_DEVICE`` or ``$PYOPENCL_CTX``).
+"""
+
+from .api import synthesize
+from .device import Device, list_devices, select_device
+from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
+from .params import HEURISTICS
+from .synth import SweepInfo, SynthesisResult
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "synthesize", "select_device", "list_devices", "Device", "SweepInfo", "SynthesisResult",
+    "HEURISTICS", "ClsolidError", "InputError", "NoDeviceError", "DeviceMemoryError",
+    "KernelBuildError", "__version__",
+]

@@ -1,0 +1,66 @@
+"""Locate the ``.cl`` sources and build programs, one cache per context."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .device import Device
+from .errors import KernelBuildError
+
+_HERE = Path(__file__).resolve().parent
+
+
+def kernel_dir() -> Path:
+    """Directory holding the OpenCL sources.
+
+    A wheel installs them as ``clsolid/kernels``; a source checkout or an editable
+    install keeps them in the top-level ``kernels/`` beside the package.
+    """
+    for candidate in (_HERE / "kernels", _HERE.parent / "kernels"):
+        if (candidate / "ml.cl").is_file():
+            return candidate
+    raise FileNotFoundError(
+        f"clsolid's OpenCL kernels were not found in {_HERE / 'kernels'} or "
+        f"{_HERE.parent / 'kernels'}; reinstall clsolid (pip install clsolid)"
+    )
+
+
+def read_source(name: str) -> str:
+    """Source of ``kernels/<name>`` prefixed by a ``#line`` so errors point at the file."""
+    path = kernel_dir() / name
+    return f'#line 1 "kernels/{name}"\n' + path.read_text()
+
+
+def include_options() -> list[str]:
+    """Compiler options that make ``#include <pyopencl-random123/philox.cl>`` work."""
+    import pyopencl as cl
+
+    return ["-I", str(Path(cl.__file__).parent / "cl")]
+
+
+def build(device: Device, name: str, defines: dict[str, int | float] | None = None) -> dict:
+    """Build ``kernels/<name>`` with ``-D`` *defines*; return its kernels by name.
+
+    Programs are cached on the Device by (source, options) and every kernel object is
+    retrieved once, so repeated calls are free.
+    """
+    import pyopencl as cl
+
+    source = read_source(name)
+    options = tuple(include_options()) + tuple(
+        f"-D{k}={v}" for k, v in sorted((defines or {}).items())
+    )
+    key = (source, options)
+    cached = device.programs.get(key)
+    if cached is not None:
+        return cached
+    try:
+        program = cl.Program(device.context, source).build(options=list(options))
+    except cl.RuntimeError as exc:
+        raise KernelBuildError(
+            f"building kernels/{name} with {' '.join(options[2:]) or 'no options'} failed on "
+            f"{device.name}:\n{exc}"
+        ) from exc
+    kernels = {k.function_name: k for k in program.all_kernels()}
+    device.programs[key] = kernels
+    return kernels

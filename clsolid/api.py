@@ -1,0 +1,160 @@
+"""The public entry point: :func:`synthesize`."""
+
+from __future__ import annotations
+
+import logging
+from typing import Callable
+
+import numpy as np
+
+from .errors import InputError
+from .params import MLParams
+from .synth import SweepInfo, SynthesisResult, check_shape, resolve_seed, run_ml
+
+log = logging.getLogger(__name__)
+
+METHODS = ("ml",)
+PLANNED_METHODS = ("wl", "kopf", "chen-wang")
+_ML_OPTIONS = ("xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices", "bandwidth")
+_BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch")
+
+
+def level_values(image: np.ndarray, levels: int | None) -> np.ndarray:
+    """Grey value (input units) at the centre of each quantisation bin of :func:`quantise`."""
+    if levels is None:
+        return np.arange(256, dtype=np.float64)
+    lo, hi = float(np.min(image)), float(np.max(image))
+    return lo + (np.arange(levels) + 0.5) * (hi - lo) / levels
+
+
+def make_backend(device, backend_options: dict):
+    """The reference back end for ``device="reference"``, else an OpenCL one."""
+    if isinstance(device, str) and device.lower() == "reference":
+        from .reference import ReferenceBackend
+
+        return ReferenceBackend()
+    from .cl_backend import CLBackend
+    from .device import select_device
+
+    return CLBackend(select_device(device), **backend_options)
+
+
+def synthesize(
+    exemplar,
+    shape,
+    *,
+    method: str = "ml",
+    heuristic: str = "h2-product",
+    neighborhood: int = 9,
+    scales: int = 3,
+    views: int = 2,
+    levels: int | None = 32,
+    rng=None,
+    device=None,
+    progress: Callable[[SweepInfo], None] | None = None,
+    full_output: bool = False,
+    **options,
+):
+    """Grow a solid texture whose slices look like a 2D exemplar.
+
+    The NP-MRF maximum-likelihood method of Urs, Da Costa & Germain (IEEE TIP 2014):
+    every voxel takes the grey level that maximises its local conditional probability,
+    estimated with a Gaussian Parzen window over every neighbourhood of the exemplar,
+    on 2 or 3 orthogonal slices through the voxel; relaxed by ICM with per-voxel
+    temperatures, coarse to fine. Voxels are updated in conflict-free sets, so the
+    result is that of a sequential ICM visiting the sets in a seeded order.
+
+    Parameters
+    ----------
+    exemplar : ndarray, str or path
+        2D grey image (uint8, uint16 or float), a ``.png``/``.tif``/``.npy`` path, or a
+        built-in name (``"brick"``, ``"grass"``, ``"gravel"``: scikit-image's 512x512
+        textures, top-left 256x256 area-averaged to 64x64; option ``builtin_size``).
+    shape : tuple of 3 ints
+        ``(Z, Y, X)`` size of the block. Output is toroidal (tileable); any sizes work.
+    method : {"ml"}
+        Only the maximum-likelihood method exists so far.
+    heuristic : str
+        How the per-view LCPDFs are combined (default ``"h2-product"``):
+
+        ============ ============================================== ========== =======
+        name         rule                                           thesis     paper
+        ============ ============================================== ========== =======
+        h1-lowest    best label per view; keep the least probable   NP_ML_H1a  ML_H1a
+        h1-highest   best label per view; keep the most probable    NP_ML_H1b  --
+        h1-mean      best label per view; their mean (rounded)      NP_ML_H1c  ML_H1b
+        h2-min       argmax over labels of the smallest view LCPDF  NP_ML_H2a  ML_H2a
+        h2-max       argmax over labels of the largest view LCPDF   NP_ML_H2b  --
+        h2-product   argmax over labels of the product of LCPDFs    NP_ML_H2c  ML_H2b
+        ============ ============================================== ========== =======
+
+        Thesis and paper tags are accepted as aliases (case-insensitive).
+    neighborhood : int
+        Odd side of the full-square window in each view (3 to 31; thesis 7, 9 or 11).
+    scales : int
+        Number of decimation scales (each halves the exemplar and the block).
+    views : {2, 3}
+        2: front (y, x) and right (y, z) planes, which share the y axis; 3: also top (z, x).
+        Exemplar rows map to y in front and right, to z in top.
+    levels : int or None
+        Grey levels the exemplar is quantised to (uniformly over its own range);
+        ``None`` keeps all 256 levels of an 8-bit exemplar.
+    rng : int, numpy.random.Generator or None
+        Seed. The same seed gives the same volume on the same device.
+    device : str, Device or None
+        OpenCL device (see :func:`clsolid.select_device`), or ``"reference"`` for the
+        slow float64 NumPy back end.
+    progress : callable, optional
+        Called with a :class:`SweepInfo` after every sweep (``info.volume()`` gives the
+        current block, for evaluation during the run).
+    full_output : bool
+        Return a :class:`SynthesisResult` (parameters, seed, timings) instead of the array.
+    **options
+        ``xi`` (cooling, default -3), ``stop_fraction`` (0.95: a scale stops when the global
+        temperature has fallen by this fraction, or reaches 0), ``max_sweeps`` (30 per scale),
+        ``upsampling`` (``"1/8"`` or ``"8/8"``), ``inherited`` (``"resynthesize"`` with t held
+        at 0, or ``"fixed"``), ``insert_slices`` (exemplar slices tiled onto this many slices
+        of each constrained view at the start, the thesis's ``+in``; default 0),
+        ``bandwidth`` (Parzen h, one value or one per scale finest first; default Silverman's
+        rule per scale), ``builtin_size``, and OpenCL tuning: ``vector_width``,
+        ``voxels_per_item``, ``local_size``, ``max_batch``.
+
+    Returns
+    -------
+    ndarray or SynthesisResult
+        ``(Z, Y, X)`` grey-level indices in ``[0, levels)``, uint8 (uint16 above 256 levels).
+
+    Raises
+    ------
+    InputError
+        A bad parameter or exemplar; the message names it.
+    NoDeviceError, DeviceMemoryError, KernelBuildError
+        No OpenCL device; buffers too large for the device (checked before allocating);
+        a kernel failed to build.
+    """
+    from .exemplar import load_exemplar, quantise
+
+    if method not in METHODS:
+        planned = f" ({', '.join(PLANNED_METHODS)} are planned, not implemented yet)" if method in PLANNED_METHODS else ""
+        raise InputError(f"method={method!r} is not available{planned}; use one of {METHODS}")
+    unknown = set(options) - set(_ML_OPTIONS) - set(_BACKEND_OPTIONS) - {"builtin_size"}
+    if unknown:
+        raise InputError(
+            f"unknown option(s) {sorted(unknown)}; valid: {', '.join(_ML_OPTIONS + _BACKEND_OPTIONS)}, builtin_size"
+        )
+    shape = check_shape(shape)
+    params = MLParams(neighborhood=neighborhood, scales=scales, views=views, levels=levels,
+                      heuristic=heuristic, **{k: options[k] for k in _ML_OPTIONS if k in options})
+    image = load_exemplar(exemplar, builtin_size=options.get("builtin_size", 64))
+    labels_img = quantise(image, levels)
+    seed = resolve_seed(rng)
+    backend = make_backend(device, {k: options[k] for k in _BACKEND_OPTIONS if k in options})
+    log.info("synthesising %s from a %s exemplar on %s, seed %d", shape, labels_img.shape, backend.name, seed)
+    vol, timings, bandwidths = run_ml(labels_img, shape, params, seed, backend, progress)
+    n_levels = 256 if levels is None else levels
+    out = np.rint(vol).astype(np.uint8 if n_levels <= 256 else np.uint16)
+    if not full_output:
+        return out
+    effective = {"method": method, **params.to_dict(), "bandwidth_effective": bandwidths, "shape": list(shape)}
+    return SynthesisResult(volume=out, exemplar=labels_img, level_values=level_values(image, levels),
+                           seed=seed, params=effective, device=backend.name, timings=timings)

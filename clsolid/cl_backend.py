@@ -1,0 +1,204 @@
+"""OpenCL back end of the ML method: device buffers and kernel launches, one scale at a time."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import _kernels
+from .device import Device
+from .errors import DeviceMemoryError
+from .ml_model import ScaleModel
+from .params import MLParams
+from .philox import TAG_INIT, seed_key
+
+_F4 = 4  # bytes per float32 / int32
+
+
+def group_tables(model: ScaleModel, vw: int):
+    """Exemplar sites sorted by centre value and padded per group to whole vectors.
+
+    Returns ``patches`` ``(chunks, R, vw)`` float32, ``chunk_group`` and ``chunk_valid``
+    (int32 per chunk) and the group values (float32, ascending).
+    """
+    values, group_of_site = np.unique(model.centres, return_inverse=True)
+    counts = np.bincount(group_of_site, minlength=values.size)
+    order = np.argsort(group_of_site, kind="stable")
+    chunks_per_group = -(-counts // vw)
+    chunk_group = np.repeat(np.arange(values.size), chunks_per_group).astype(np.int32)
+    first_chunk = np.concatenate([[0], np.cumsum(chunks_per_group)[:-1]])
+    group_start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    rank = np.arange(model.n_sites) - group_start[group_of_site[order]]  # position within group
+    slot = first_chunk[group_of_site[order]] * vw + rank  # padded position of each sorted site
+    n_chunks = chunk_group.size
+    padded = np.zeros((model.patches.shape[0], n_chunks * vw), np.float32)
+    padded[:, slot] = model.patches[:, order]
+    patches = padded.reshape(-1, n_chunks, vw).transpose(1, 0, 2).copy()
+    chunk_valid = np.minimum(vw, counts[chunk_group] - (np.arange(n_chunks) - first_chunk[chunk_group]) * vw)
+    return patches, chunk_group, chunk_valid.astype(np.int32), values.astype(np.float32)
+
+
+class CLBackend:
+    """Runs the per-voxel work of :func:`clsolid.synth.run_ml` on an OpenCL device.
+
+    Parameters
+    ----------
+    device : Device
+    vector_width : int
+        Exemplar sites per vector in the distance kernel (4, 8 or 16).
+    voxels_per_item : int
+        Voxel-views per work item; they share each exemplar load.
+    local_size : int
+        Work-group size. The result does not depend on it.
+    max_batch : int
+        Most voxels relaxed per launch (bounds the scratch buffer).
+    """
+
+    def __init__(self, device: Device, *, vector_width: int = 16, voxels_per_item: int = 4,
+                 local_size: int = 16, max_batch: int = 32768):
+        self.device = device
+        self.vw, self.vb, self.local, self.max_batch = vector_width, voxels_per_item, local_size, max_batch
+        self.name = device.name
+
+    # -- memory ------------------------------------------------------------------------
+    def buffer_sizes(self, model: ScaleModel, n_labels: int) -> dict[str, int]:
+        """Bytes of every device buffer a scale needs."""
+        n_vox = int(np.prod(model.shape))
+        views, nr = model.offsets.shape[:2]
+        chunks = int(np.sum(-(-np.bincount(np.unique(model.centres, return_inverse=True)[1]) // self.vw)))
+        batch = min(self.max_batch, n_vox)
+        return {
+            "volume": n_vox * _F4,
+            "temperature": n_vox * _F4,
+            "exemplar patches": chunks * nr * self.vw * _F4,
+            "group log-sums": batch * views * n_labels * _F4,
+            "voxel indices": batch * _F4,
+        }
+
+    def prepare(self, models: list[ScaleModel]) -> None:
+        """Refuse, before allocating anything, a run whose buffers exceed the device limits."""
+        for model in models:
+            sizes = self.buffer_sizes(model, model.labels.size)
+            for name, nbytes in sizes.items():
+                if nbytes > self.device.max_alloc:
+                    raise DeviceMemoryError(name, nbytes, self.device.max_alloc)
+            total = sum(sizes.values())
+            if total > self.device.global_mem:
+                raise DeviceMemoryError("all buffers together", total, self.device.global_mem, "global_mem_size")
+
+    # -- kernels -----------------------------------------------------------------------
+    def _kernels(self, model: ScaleModel, n_labels: int) -> dict:
+        views, nr = model.offsets.shape[:2]
+        return _kernels.build(self.device, "ml.cl", {
+            "NR": nr, "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
+        })
+
+    def _global(self, n: int) -> int:
+        return -(-max(n, 1) // self.local) * self.local
+
+    def _buf(self, array: np.ndarray, writable: bool = False):
+        import pyopencl as cl
+
+        mf = cl.mem_flags
+        flags = (mf.READ_WRITE if writable else mf.READ_ONLY) | mf.COPY_HOST_PTR
+        return cl.Buffer(self.device.context, flags, hostbuf=np.ascontiguousarray(array))
+
+    # -- the back-end interface ----------------------------------------------------------
+    def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
+        """Random exemplar pixels, drawn by Philox on (seed, x, y, z) in a kernel."""
+        import pyopencl as cl
+
+        n = int(np.prod(shape))
+        if n * _F4 > self.device.max_alloc:
+            raise DeviceMemoryError("volume", n * _F4, self.device.max_alloc)
+        k = _kernels.build(self.device, "ml.cl", {"NR": 8, "VW": 4, "VB": 1, "NGMAX": 1, "NLMAX": 1, "NVIEW": 2})
+        out = np.empty(n, np.float32)
+        buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, out.nbytes)
+        key = seed_key(seed)
+        px = self._buf(pixels.astype(np.float32).ravel())
+        k["init_random"](self.device.queue, (self._global(n),), (self.local,), buf,
+                         np.int32(shape[0]), np.int32(shape[1]), np.int32(shape[2]),
+                         np.uint32(key[0]), np.uint32(key[1]), np.uint32(TAG_INIT), px, np.uint32(pixels.size))
+        cl.enqueue_copy(self.device.queue, out, buf)
+        return out.reshape(shape).astype(np.float64)
+
+    def start_scale(self, model: ScaleModel, vol: np.ndarray, temp: np.ndarray, params: MLParams) -> None:
+        import pyopencl as cl
+
+        n_labels = model.labels.size
+        self.prepare([model])
+        self.model, self.params = model, params
+        self.k = self._kernels(model, n_labels)
+        patches, chunk_group, chunk_valid, gvals = group_tables(model, self.vw)
+        self.n_groups, self.n_chunks = gvals.size, chunk_group.size
+        self.vol_buf = self._buf(vol.astype(np.float32), writable=True)
+        self.temp_buf = self._buf(temp.astype(np.float32), writable=True)
+        self.patches = self._buf(patches)
+        self.chunk_group, self.chunk_valid = self._buf(chunk_group), self._buf(chunk_valid)
+        self.gvals = self._buf(gvals)
+        kern = np.exp(-((model.labels[:, None] - gvals[None, :].astype(np.float64)) ** 2) / (2.0 * model.bandwidth**2))
+        self.kern = self._buf(kern.astype(np.float32))
+        self.labels = self._buf(model.labels.astype(np.float32))
+        self.offsets = self._buf(model.offsets.astype(np.int32))
+        self.union = self._buf(model.union_offsets.astype(np.int32))
+        views = model.offsets.shape[0]
+        batch = min(self.max_batch, int(np.prod(model.shape)))
+        mf = cl.mem_flags
+        self.vox_buf = cl.Buffer(self.device.context, mf.READ_ONLY, batch * _F4)
+        self.sums = cl.Buffer(self.device.context, mf.READ_WRITE, batch * views * self.n_groups * _F4)
+        self.kfactor = np.float32(1.0 / (2.0 * model.bandwidth**2))
+        self._temp = np.empty(model.shape, np.float32)
+        self._vol = np.empty(model.shape, np.float32)
+
+    def update(self, voxels: np.ndarray) -> None:
+        """Relax one conflict-free set of voxels (flat indices), batch by batch."""
+        for i in range(0, voxels.size, self.max_batch):
+            self._update_batch(voxels[i : i + self.max_batch].astype(np.int32))
+
+    def _parzen(self, voxels: np.ndarray) -> int:
+        """Upload a batch of voxels and enqueue the group-sum kernel; return the item count."""
+        import pyopencl as cl
+
+        q, m = self.device.queue, self.model
+        views = m.offsets.shape[0]
+        n_items = voxels.size * views
+        cl.enqueue_copy(q, self.vox_buf, voxels)
+        self.k["parzen_groups"](
+            q, (self._global(-(-n_items // self.vb)),), (self.local,),
+            self.vol_buf, self.temp_buf, *self._shape_args(), self.vox_buf, np.int32(n_items),
+            np.int32(views), self.offsets, self.patches, self.chunk_group, self.chunk_valid,
+            np.int32(self.n_chunks), np.int32(self.n_groups), self.kfactor, self.sums)
+        return n_items
+
+    def _shape_args(self) -> tuple:
+        return tuple(np.int32(s) for s in self.model.shape)
+
+    def _update_batch(self, voxels: np.ndarray) -> None:
+        m = self.model
+        self._parzen(voxels)
+        self.k["decide"](
+            self.device.queue, (self._global(voxels.size),), (self.local,),
+            self.vol_buf, self.temp_buf, *self._shape_args(), self.vox_buf, np.int32(voxels.size),
+            np.int32(m.offsets.shape[0]), self.sums, np.int32(self.n_groups), self.gvals, self.kern, self.labels,
+            np.int32(m.labels.size), self.kfactor, self.union, np.int32(m.union_offsets.shape[0]),
+            np.float32(self.params.xi), np.int32(self.params.heuristic_code))
+
+    def temperature(self) -> np.ndarray:
+        import pyopencl as cl
+
+        cl.enqueue_copy(self.device.queue, self._temp, self.temp_buf)
+        return self._temp
+
+    def volume(self) -> np.ndarray:
+        import pyopencl as cl
+
+        cl.enqueue_copy(self.device.queue, self._vol, self.vol_buf)
+        return self._vol
+
+    def group_log_sums(self, voxels: np.ndarray) -> np.ndarray:
+        """Run only the Parzen kernel on *voxels*; return ``(m, views, groups)`` (for tests)."""
+        import pyopencl as cl
+
+        n_items = self._parzen(voxels.astype(np.int32))
+        out = np.empty(n_items * self.n_groups, np.float32)
+        cl.enqueue_copy(self.device.queue, out, self.sums)
+        return out.reshape(voxels.size, -1, self.n_groups)

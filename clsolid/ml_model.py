@@ -1,0 +1,132 @@
+"""What both back ends of the ML method share at one scale: geometry, exemplar tables, bandwidth.
+
+Everything here is plain NumPy and is computed once per scale. The Parzen estimate of
+thesis_spec §2.2 (TIP14 eqs. 3-9) for voxel s, view v and label lambda is
+
+    f_v(lambda) = sum_p exp(-[(lambda - c_p)^2 + A_p] / 2h^2),
+    A_p = sum_r ((1 - t_r) (x_r - y_{p,r}))^2,
+
+over every exemplar site p whose k x k window lies inside the exemplar, with c_p the
+site's centre value and y_{p,r} its neighbour r. The constant 1/(n h^d) cancels in
+every heuristic and is dropped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InputError
+from .params import VIEW_AXES, MLParams
+from .schedule import colour_sets
+
+
+def view_offsets(view: str, half: int) -> np.ndarray:
+    """``(R, 3)`` (dz, dy, dx) offsets of the neighbours of a voxel in *view*, centre excluded.
+
+    Row r pairs with the exemplar offset (dr, dc) enumerated row-major, so the r-th
+    neighbour of a voxel is compared with the r-th neighbour of an exemplar site.
+    """
+    row_axis, col_axis = VIEW_AXES[view]
+    out = []
+    for dr in range(-half, half + 1):
+        for dc in range(-half, half + 1):
+            if dr or dc:
+                off = [0, 0, 0]
+                off[row_axis], off[col_axis] = dr, dc
+                out.append(off)
+    return np.array(out, dtype=np.int32)
+
+
+def exemplar_tables(exemplar: np.ndarray, half: int) -> tuple[np.ndarray, np.ndarray]:
+    """Centre values ``(n,)`` and neighbour values ``(R, n)`` of every valid exemplar site.
+
+    Valid sites are those whose window lies inside the exemplar (no wrap-around, eq. 4.5);
+    they are enumerated row-major by window position.
+    """
+    k = 2 * half + 1
+    h, w = exemplar.shape
+    windows = np.lib.stride_tricks.sliding_window_view(exemplar, (k, k))  # (h-k+1, w-k+1, k, k)
+    flat = windows.reshape(-1, k * k).astype(np.float64)
+    centre = k * k // 2
+    return flat[:, centre].copy(), np.delete(flat, centre, axis=1).T.copy()
+
+
+def silverman(sigma: float, n: int, d: int) -> float:
+    """Silverman's bandwidth ``sigma * (4 / (n (d + 2)))^(1 / (d + 4))`` (TIP14 eq. 6)."""
+    return float(sigma * (4.0 / (n * (d + 2))) ** (1.0 / (d + 4)))
+
+
+def scale_shape(shape: tuple[int, int, int], level: int) -> tuple[int, int, int]:
+    """Shape of the block decimated *level* times (keeps even coordinates: ceil(N / 2^level))."""
+    s = 2**level
+    return tuple(-(-n // s) for n in shape)
+
+
+@dataclass
+class ScaleModel:
+    """The tables of one scale. ``level`` 0 is full resolution."""
+
+    level: int
+    shape: tuple[int, int, int]
+    exemplar: np.ndarray
+    half: int
+    offsets: np.ndarray  # (views, R, 3)
+    union_offsets: np.ndarray  # (U, 3): neighbours in any constrained view
+    centres: np.ndarray  # (n,)
+    patches: np.ndarray  # (R, n)
+    bandwidth: float
+    labels: np.ndarray  # the grey levels Lambda, ascending
+    colour: np.ndarray  # (Z, Y, X) set of each voxel
+    n_sets: int
+
+    @property
+    def n_sites(self) -> int:
+        return self.centres.size
+
+
+def check_exemplar_fits(exemplar_shape: tuple[int, int], params: MLParams) -> None:
+    """Refuse an exemplar too small for the window at the coarsest scale."""
+    coarse = scale_shape((1,) + tuple(exemplar_shape), params.scales - 1)[1:]
+    if min(coarse) < params.neighborhood:
+        raise InputError(
+            f"exemplar of shape {tuple(exemplar_shape)} is too small: at the coarsest of "
+            f"scales={params.scales} it is {coarse[0]}x{coarse[1]}, smaller than the "
+            f"neighborhood={params.neighborhood} window; use fewer scales, a smaller "
+            "neighborhood or a larger exemplar"
+        )
+
+
+def build_scale(
+    labels_img: np.ndarray, shape: tuple[int, int, int], params: MLParams, level: int
+) -> ScaleModel:
+    """Tables of scale *level* from the full-resolution exemplar labels."""
+    half = params.neighborhood // 2
+    step = 2**level
+    ex = labels_img[::step, ::step]
+    centres, patches = exemplar_tables(ex, half)
+    if params.bandwidth is not None:
+        h = params.bandwidth[level]
+    else:
+        sigma = float(ex.std())
+        # A constant exemplar has sigma = 0; any bandwidth gives the same (constant) result.
+        h = silverman(sigma, centres.size, params.neighborhood**2) if sigma > 0 else 1.0
+    offsets = np.stack([view_offsets(v, half) for v in params.view_names])
+    union = np.unique(offsets.reshape(-1, 3), axis=0)
+    sshape = scale_shape(shape, level)
+    colour, n_sets = colour_sets(sshape, half)
+    return ScaleModel(
+        level=level,
+        shape=sshape,
+        exemplar=ex,
+        half=half,
+        offsets=offsets,
+        union_offsets=union,
+        centres=centres,
+        patches=patches,
+        bandwidth=h,
+        labels=np.unique(labels_img).astype(np.float64),
+        colour=colour,
+        n_sets=n_sets,
+    )

@@ -1,0 +1,125 @@
+"""Parameters of the NP-MRF maximum-likelihood method, their names, aliases and checks."""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import asdict, dataclass, field
+
+from .errors import InputError
+
+#: clsolid name -> (kernel code, thesis tag, paper tag). One table, used by the API, the CLI,
+#: the docs and both back ends. Heuristics that compare LCPDFs across views (all but
+#: the product and the mean) normalise each view over the labels first.
+HEURISTICS: dict[str, tuple[int, str, str | None]] = {
+    "h2-product": (0, "NP_ML_H2c", "ML_H2b"),
+    "h2-min": (1, "NP_ML_H2a", "ML_H2a"),
+    "h2-max": (2, "NP_ML_H2b", None),
+    "h1-lowest": (3, "NP_ML_H1a", "ML_H1a"),
+    "h1-highest": (4, "NP_ML_H1b", None),
+    "h1-mean": (5, "NP_ML_H1c", "ML_H1b"),
+}
+
+# Both tag sets, case-insensitive. The paper's ML_H2b is the thesis's NP_ML_H2c (the
+# product), so the two sets are kept apart by their prefixes and never guessed at.
+_ALIASES = {name: name for name in HEURISTICS}
+for _name, (_code, _thesis, _paper) in HEURISTICS.items():
+    _ALIASES[_thesis.lower()] = _name
+    if _paper:
+        _ALIASES[_paper.lower()] = _name
+
+#: View name -> (volume axis of the exemplar rows, volume axis of the exemplar columns).
+#: Axes are 0 = z, 1 = y, 2 = x. Front and right share y, the stacking axis of laminar
+#: textures; top is the (z, x) plane.
+VIEW_AXES: dict[str, tuple[int, int]] = {"front": (1, 2), "right": (1, 0), "top": (0, 2)}
+VIEW_SETS: dict[int, tuple[str, ...]] = {2: ("front", "right"), 3: ("front", "right", "top")}
+
+UPSAMPLING = ("1/8", "8/8")
+INHERITED = ("resynthesize", "fixed")
+
+
+def canonical_heuristic(name: str) -> str:
+    """Return the clsolid name of a heuristic given any of its names or tags."""
+    if not isinstance(name, str) or name.lower() not in _ALIASES:
+        valid = ", ".join(f"{n} ({t}/{p or '-'})" for n, (_, t, p) in HEURISTICS.items())
+        raise InputError(f"heuristic={name!r} is not known; use one of: {valid}")
+    return _ALIASES[name.lower()]
+
+
+def _int_in(name: str, value, lo: int, hi: int | None = None) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise InputError(f"{name}={value!r} must be an integer")
+    if value < lo or (hi is not None and value > hi):
+        rng = f">= {lo}" if hi is None else f"in [{lo}, {hi}]"
+        raise InputError(f"{name}={value!r} must be {rng}")
+    return int(value)
+
+
+def _choice(name: str, value, options: tuple[str, ...]) -> str:
+    if value not in options:
+        raise InputError(f"{name}={value!r} must be one of {', '.join(map(repr, options))}")
+    return value
+
+
+@dataclass(frozen=True)
+class MLParams:
+    """Every parameter of the ML method (thesis_spec §2), validated on construction.
+
+    See :func:`clsolid.synthesize` for the meaning of each field.
+    """
+
+    neighborhood: int = 9
+    scales: int = 3
+    views: int = 2
+    levels: int | None = 32
+    heuristic: str = "h2-product"
+    xi: float = -3.0
+    stop_fraction: float = 0.95
+    max_sweeps: int = 30
+    upsampling: str = "1/8"
+    inherited: str = "resynthesize"
+    insert_slices: int = 0
+    bandwidth: tuple[float, ...] | None = field(default=None)
+
+    def __post_init__(self):
+        k = _int_in("neighborhood", self.neighborhood, 3, 31)
+        if k % 2 == 0:
+            raise InputError(f"neighborhood={k} must be odd (a full square k x k centred on the voxel)")
+        _int_in("scales", self.scales, 1, 8)
+        if self.views not in VIEW_SETS:
+            raise InputError(f"views={self.views!r} must be 2 (front + right) or 3 (front + right + top)")
+        if self.levels is not None:
+            _int_in("levels", self.levels, 2, 65536)
+        object.__setattr__(self, "heuristic", canonical_heuristic(self.heuristic))
+        if not (isinstance(self.xi, numbers.Real) and math.isfinite(self.xi) and self.xi < 0):
+            raise InputError(f"xi={self.xi!r} must be a finite negative number (thesis default -3)")
+        if not (isinstance(self.stop_fraction, numbers.Real) and 0 < self.stop_fraction <= 1):
+            raise InputError(f"stop_fraction={self.stop_fraction!r} must be in (0, 1] (1 = until zero)")
+        _int_in("max_sweeps", self.max_sweeps, 1)
+        _choice("upsampling", self.upsampling, UPSAMPLING)
+        _choice("inherited", self.inherited, INHERITED)
+        _int_in("insert_slices", self.insert_slices, 0)
+        if self.bandwidth is not None:
+            bw = self.bandwidth
+            bw = (bw,) * self.scales if isinstance(bw, numbers.Real) else tuple(bw)
+            if len(bw) != self.scales or not all(
+                isinstance(b, numbers.Real) and math.isfinite(b) and b > 0 for b in bw
+            ):
+                raise InputError(
+                    f"bandwidth={self.bandwidth!r} must be a positive number or one per scale "
+                    f"({self.scales} values, finest first)"
+                )
+            object.__setattr__(self, "bandwidth", tuple(float(b) for b in bw))
+
+    @property
+    def view_names(self) -> tuple[str, ...]:
+        return VIEW_SETS[self.views]
+
+    @property
+    def heuristic_code(self) -> int:
+        return HEURISTICS[self.heuristic][0]
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["bandwidth"] = list(self.bandwidth) if self.bandwidth else None
+        return d

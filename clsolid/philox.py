@@ -1,0 +1,57 @@
+"""Philox4x32-10 counter-based generator (Salmon et al., SC'11) in NumPy.
+
+The kernels use Random123's ``philox4x32`` (shipped with pyopencl); this is the
+bit-exact NumPy twin used by the float64 reference and by the tests. A stream is
+keyed by the seed, and counted by voxel coordinates and a tag (sweep or purpose),
+so the numbers do not depend on the device, the work-group size or the order in
+which voxels are processed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+_M0, _M1 = np.uint64(0xD2511F53), np.uint64(0xCD9E8D57)
+_W0, _W1 = np.uint64(0x9E3779B9), np.uint64(0xBB67AE85)
+_LO = np.uint64(0xFFFFFFFF)
+
+#: Tags that separate the streams drawn for different purposes.
+TAG_INIT = 0
+
+
+def philox4x32(counter: np.ndarray, key: np.ndarray, rounds: int = 10) -> np.ndarray:
+    """Apply Philox4x32 to ``counter`` (``(..., 4)`` uint32) with ``key`` (``(..., 2)`` uint32).
+
+    Returns the ``(..., 4)`` uint32 output block.
+    """
+    c = np.asarray(counter, dtype=np.uint32)
+    k = np.asarray(key, dtype=np.uint32)
+    c0, c1, c2, c3 = (c[..., i].astype(np.uint64) for i in range(4))
+    k0, k1 = k[..., 0].astype(np.uint64), k[..., 1].astype(np.uint64)
+    for r in range(rounds):
+        if r:  # key schedule in 64-bit arithmetic, wrapped to 32 bits
+            k0 = (k0 + _W0) & _LO
+            k1 = (k1 + _W1) & _LO
+        p0, p1 = _M0 * c0, _M1 * c2
+        hi0, lo0 = p0 >> np.uint64(32), p0 & _LO
+        hi1, lo1 = p1 >> np.uint64(32), p1 & _LO
+        c0, c1, c2, c3 = hi1 ^ c1 ^ k0, lo1, hi0 ^ c3 ^ k1, lo0
+    return np.stack([c0, c1, c2, c3], axis=-1).astype(np.uint32)
+
+
+def seed_key(seed: int) -> np.ndarray:
+    """The Philox key of a 64-bit seed."""
+    seed = int(seed) & 0xFFFFFFFFFFFFFFFF
+    return np.array([seed & 0xFFFFFFFF, seed >> 32], dtype=np.uint32)
+
+
+def voxel_uint32(seed: int, shape: tuple[int, int, int], tag: int) -> np.ndarray:
+    """First Philox word for every voxel of a ``(Z, Y, X)`` block, counter ``(x, y, z, tag)``."""
+    z, y, x = np.meshgrid(*(np.arange(n, dtype=np.uint32) for n in shape), indexing="ij")
+    ctr = np.stack([x, y, z, np.full_like(x, tag)], axis=-1)
+    return philox4x32(ctr, seed_key(seed))[..., 0]
+
+
+def bounded(u: np.ndarray, n: int) -> np.ndarray:
+    """Map uniform uint32 words to ``[0, n)`` by multiply-high (as ``mul_hi`` in the kernels)."""
+    return ((u.astype(np.uint64) * np.uint64(n)) >> np.uint64(32)).astype(np.int64)

@@ -1,0 +1,238 @@
+"""The multi-scale ICM driver (thesis_spec §2.10), shared by the OpenCL and reference back ends."""
+
+from __future__ import annotations
+
+import logging
+import math
+import numbers
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from .errors import InputError
+from .ml_model import ScaleModel, build_scale, check_exemplar_fits
+from .params import MLParams
+from .schedule import set_order, split_by_colour
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class SweepInfo:
+    """What a ``progress`` callback receives after every sweep.
+
+    ``scale`` counts from 1 (coarsest) to ``n_scales`` (full resolution); ``temperature``
+    is the global temperature (sum of voxel temperatures) after the sweep and
+    ``target`` the value that ends the scale. ``eta`` is an estimate in seconds of
+    the time left for the whole synthesis. ``volume()`` returns a copy of the block
+    at the current scale, for evaluation during the run.
+    """
+
+    scale: int
+    n_scales: int
+    shape: tuple[int, int, int]
+    sweep: int
+    max_sweeps: int
+    temperature: float
+    initial_temperature: float
+    target: float
+    visited: int
+    elapsed: float
+    eta: float
+    volume: Callable[[], np.ndarray] = field(repr=False)
+
+
+@dataclass
+class SynthesisResult:
+    """A synthesised volume with everything needed to reproduce and judge it.
+
+    Attributes
+    ----------
+    volume : ndarray
+        ``(Z, Y, X)`` grey-level indices in ``[0, levels)`` (uint8, or uint16 above 256).
+    exemplar : ndarray
+        The quantised exemplar the volume was grown from (same grey-level indices).
+    level_values : ndarray
+        Grey value, in the exemplar's own units, of each index (the centre of its bin);
+        ``level_values[volume]`` maps the volume back to the exemplar's scale.
+    seed : int
+        The seed actually used; passing it as ``rng`` reproduces the volume on the same device.
+    params : dict
+        Every effective parameter, including the per-scale bandwidths.
+    device : str
+        The back end that ran the synthesis.
+    timings : dict
+        ``total_s`` and, per scale (coarsest first), the shape, sweeps, global
+        temperatures and seconds per sweep.
+    """
+
+    volume: np.ndarray
+    exemplar: np.ndarray
+    level_values: np.ndarray
+    seed: int
+    params: dict
+    device: str
+    timings: dict
+
+    def grey(self) -> np.ndarray:
+        """The volume in the exemplar's grey-value units."""
+        return self.level_values[self.volume]
+
+
+def resolve_seed(rng) -> int:
+    """SPEC 7: an int seed, a ``numpy.random.Generator``, or None (fresh entropy)."""
+    if rng is None:
+        return int(np.random.SeedSequence().generate_state(1, np.uint64)[0] >> np.uint64(1))
+    if isinstance(rng, np.random.Generator):
+        return int(rng.integers(0, 2**63 - 1))
+    if isinstance(rng, numbers.Integral) and not isinstance(rng, bool) and 0 <= rng < 2**64:
+        return int(rng)
+    raise InputError(f"rng={rng!r} must be a non-negative int seed, a numpy Generator or None")
+
+
+def check_shape(shape) -> tuple[int, int, int]:
+    try:
+        out = tuple(int(s) for s in shape)
+        ok = len(out) == 3 and all(float(s) == o for s, o in zip(shape, out))
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise InputError(f"shape={shape!r} must be three integers (Z, Y, X)")
+    if min(out) < 1:
+        raise InputError(f"shape={out} must have every size >= 1")
+    return out
+
+
+def insert_slices(vol: np.ndarray, labels_img: np.ndarray, views: tuple[str, ...], count: int) -> None:
+    """``+in``: tile the exemplar onto *count* evenly spaced slices of each constrained view."""
+    if count == 0:
+        return
+    Z, Y, X = vol.shape
+
+    def tiled(rows: int, cols: int) -> np.ndarray:
+        reps = (-(-rows // labels_img.shape[0]), -(-cols // labels_img.shape[1]))
+        return np.tile(labels_img, reps)[:rows, :cols]
+
+    for view in views:
+        if view == "front":
+            for z in np.linspace(0, Z, count, endpoint=False).astype(int):
+                vol[z] = tiled(Y, X)
+        elif view == "right":
+            for x in np.linspace(0, X, count, endpoint=False).astype(int):
+                vol[:, :, x] = tiled(Y, Z).T
+        else:
+            for y in np.linspace(0, Y, count, endpoint=False).astype(int):
+                vol[:, y, :] = tiled(Z, X)
+
+
+def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, params: MLParams):
+    """Volume, temperatures and inherited mask at the start of a scale (§2.7)."""
+    step = 2**model.level
+    vol = base[::step, ::step, ::step].astype(np.float64)
+    temp = np.ones(model.shape)
+    if coarse is not None:
+        if params.upsampling == "8/8":
+            up = coarse.repeat(2, 0).repeat(2, 1).repeat(2, 2)
+            vol[...] = up[: model.shape[0], : model.shape[1], : model.shape[2]]
+        else:
+            vol[::2, ::2, ::2] = coarse
+        # Only the voxel at the even corner is inherited (t = 0), under 1/8 and 8/8 alike.
+        temp[::2, ::2, ::2] = 0.0
+    return vol, temp
+
+
+class _Clock:
+    """Per-sweep timing and a rough estimate of the time left."""
+
+    def __init__(self, models: list[ScaleModel]):
+        self.t0 = time.perf_counter()
+        # Work of a full sweep at each scale: voxels x exemplar sites x window terms.
+        self.work = [np.prod(m.shape) * m.n_sites * m.patches.shape[0] for m in models]
+        self.rate: float | None = None  # seconds per unit of work, measured
+
+    def eta(self, i: int, sweep_s: float, visited: int, model: ScaleModel, t: float, t_prev: float, target: float, sweeps_left: int) -> float:
+        unit = model.n_sites * model.patches.shape[0]
+        if visited:
+            self.rate = sweep_s / (visited * unit)
+        if self.rate is None:
+            return math.nan
+        ratio = t / t_prev if t_prev > 0 else 0.0
+        if t <= target or ratio <= 0:
+            left_here = 0
+        elif ratio >= 1:
+            left_here = sweeps_left
+        else:
+            left_here = min(sweeps_left, math.ceil(math.log(target / t) / math.log(ratio)))
+        here = sweep_s * left_here
+        # A finer scale relaxes about as many voxel-visits per voxel as the coarsest did.
+        later = sum(self.work[i + 1 :]) * self.rate * 2.5
+        return float(here + later)
+
+
+def run_ml(
+    labels_img: np.ndarray,
+    shape: tuple[int, int, int],
+    params: MLParams,
+    seed: int,
+    backend: Any,
+    progress: Callable[[SweepInfo], None] | None = None,
+) -> tuple[np.ndarray, dict, list[float]]:
+    """Run the multi-scale ICM on quantised exemplar labels with a back end.
+
+    Returns the full-resolution volume, the timings and the per-scale bandwidths.
+    """
+    check_exemplar_fits(labels_img.shape, params)
+    levels = list(range(params.scales - 1, -1, -1))
+    models = [build_scale(labels_img, shape, params, lv) for lv in levels]
+    backend.prepare(models)  # refuses, before allocating, what the device cannot hold
+    clock = _Clock(models)
+    base = backend.init_volume(shape, seed, models[0].exemplar)
+    insert_slices(base, labels_img, params.view_names, params.insert_slices)
+    resynth = params.inherited == "resynthesize"
+    coarse = None
+    timings: dict = {"scales": []}
+    for i, model in enumerate(models):
+        t_scale = time.perf_counter()
+        vol, temp = start_state(model, base, coarse, params)
+        inherited = temp == 0
+        backend.start_scale(model, vol, temp, params)
+        t_init = float(temp.sum())
+        target = (1.0 - params.stop_fraction) * t_init
+        record = {"level": model.level, "shape": list(model.shape), "bandwidth": model.bandwidth,
+                  "n_sites": model.n_sites, "n_sets": model.n_sets, "initial_temperature": t_init,
+                  "temperatures": [], "visited": [], "sweep_seconds": []}
+        t_now = t_init
+        for sweep in range(1, params.max_sweeps + 1):
+            t_sweep = time.perf_counter()
+            temp = backend.temperature()
+            active = (temp > 0) | (inherited & resynth)
+            sets = split_by_colour(active, model.colour, model.n_sets)
+            for c in set_order(model.n_sets, seed, model.level, sweep):
+                if sets[c].size:
+                    backend.update(sets[c])
+            t_prev, t_now = t_now, float(np.sum(backend.temperature(), dtype=np.float64))
+            visited = int(active.sum())
+            sweep_s = time.perf_counter() - t_sweep
+            record["temperatures"].append(t_now)
+            record["visited"].append(visited)
+            record["sweep_seconds"].append(sweep_s)
+            done = t_now <= target or t_now == 0.0 or sweep == params.max_sweeps
+            log.debug("scale %d sweep %d: T=%.1f visited=%d %.2fs", i + 1, sweep, t_now, visited, sweep_s)
+            if progress is not None:
+                eta = clock.eta(i, sweep_s, visited, model, t_now, t_prev, target,
+                                0 if done else params.max_sweeps - sweep)
+                progress(SweepInfo(scale=i + 1, n_scales=len(models), shape=model.shape, sweep=sweep,
+                                   max_sweeps=params.max_sweeps, temperature=t_now,
+                                   initial_temperature=t_init, target=target, visited=visited,
+                                   elapsed=time.perf_counter() - clock.t0, eta=eta,
+                                   volume=lambda: np.array(backend.volume(), copy=True)))
+            if done:
+                break
+        coarse = np.asarray(backend.volume(), dtype=np.float64).reshape(model.shape)
+        record["sweeps"] = len(record["temperatures"])
+        record["seconds"] = time.perf_counter() - t_scale
+        timings["scales"].append(record)
+    timings["total_s"] = time.perf_counter() - clock.t0
+    return coarse, timings, [m.bandwidth for m in models]

@@ -1,0 +1,282 @@
+/* NP-MRF maximum-likelihood synthesis: the per-voxel work of one ICM step.
+ *
+ * Layout: volumes are (Z, Y, X), row-major; a voxel's flat index is (z * Y + y) * X + x.
+ * Global id 0 enumerates work items (voxels or voxel-views of the current batch); the
+ * host passes the batch's flat voxel indices, so sizes are kernel arguments and one
+ * build serves every shape. Neighbours wrap around (toroidal, tileable output).
+ *
+ * Compile-time constants (-D):
+ *   NR     neighbours per view (k*k - 1)
+ *   VW     exemplar sites per vector (4, 8 or 16)
+ *   VB     voxel-views per work item in parzen_groups, 1, 2, 4 or 8 (they share each load)
+ *   NGMAX  largest number of centre-value groups
+ *   NLMAX  largest number of labels
+ *   NVIEW  number of constrained views (2 or 3)
+ */
+#include <pyopencl-random123/philox.cl>
+
+#define CAT_(a, b) a##b
+#define CAT(a, b) CAT_(a, b)
+typedef CAT(float, VW) floatv;
+typedef CAT(int, VW) intv;
+#define vloadv CAT(vload, VW)
+
+/* Far below any term that can matter: exp of it is 0 in float32. */
+#define NEGLIGIBLE (-87.0f)
+
+inline float hmin(floatv v)
+{
+#if VW == 16
+    float8 a = fmin(v.lo, v.hi);
+    float4 b = fmin(a.lo, a.hi);
+#elif VW == 8
+    float4 b = fmin(v.lo, v.hi);
+#else
+    float4 b = v;
+#endif
+    float2 c = fmin(b.lo, b.hi);
+    return fmin(c.x, c.y);
+}
+
+inline float hsum(floatv v)
+{
+#if VW == 16
+    float8 a = v.lo + v.hi;
+    float4 b = a.lo + a.hi;
+#elif VW == 8
+    float4 b = v.lo + v.hi;
+#else
+    float4 b = v;
+#endif
+    float2 c = b.lo + b.hi;
+    return c.x + c.y;
+}
+
+inline int wrap(int i, int n)
+{
+    int r = i % n;
+    return r < 0 ? r + n : r;
+}
+
+inline int neighbour(int voxel, int Y, int X, int Z, __global const int *off)
+{
+    int z = voxel / (Y * X), rem = voxel - z * Y * X;
+    int y = rem / X, x = rem - y * X;
+    return (wrap(z + off[0], Z) * Y + wrap(y + off[1], Y)) * X + wrap(x + off[2], X);
+}
+
+/* Random exemplar pixels: Philox4x32-10 keyed by the seed, counter (x, y, z, tag). */
+__kernel void init_random(__global float *vol, int Z, int Y, int X,
+                          uint key0, uint key1, uint tag,
+                          __global const float *pixels, uint n_pixels)
+{
+    int i = get_global_id(0);
+    if (i >= Z * Y * X) return;
+    int z = i / (Y * X), rem = i - z * Y * X;
+    int y = rem / X, x = rem - y * X;
+    philox4x32_ctr_t c = {{(uint)x, (uint)y, (uint)z, tag}};
+    philox4x32_key_t k = {{key0, key1}};
+    philox4x32_ctr_t r = philox4x32(c, k);
+    vol[i] = pixels[mul_hi(r.v[0], n_pixels)];
+}
+
+/* Fold a vector of distances into one group's running (minimum, rescaled sum). */
+inline void add_chunk(floatv a, float k, float *gmin, float *gsum)
+{
+    float cmin = hmin(a), m = *gmin;
+    if (cmin < m) {
+        *gsum *= exp((cmin - m) * k);   /* first chunk: exp(-inf) * 0 = 0 */
+        *gmin = m = cmin;
+    }
+    *gsum += hsum(exp(((floatv)(m) - a) * k));   /* padding lanes: exp(-inf) = 0 */
+}
+
+/* For VB voxel-views per work item: the log of the Parzen sum of each centre-value group,
+ *   log_sums[item][g] = log sum_{p : c_p = g} exp(-k * A_p),
+ *   A_p = sum_r ((1 - t_r)(x_r - y_{p,r}))^2,       k = 1 / (2 h^2).
+ * Exemplar sites are sorted by centre value and padded per group to whole vectors
+ * (chunk_valid lanes are real); patches is laid out [chunk][r][VW]. Each group keeps a
+ * running minimum of A and a sum rescaled to it (online log-sum-exp), so nothing
+ * underflows whatever the window size or the number of grey levels.
+ * Item i is voxel voxels[i / n_views] seen in view i % n_views.
+ */
+__kernel void parzen_groups(__global const float *vol, __global const float *temp,
+                            int Z, int Y, int X,
+                            __global const int *voxels, int n_items, int n_views,
+                            __global const int *offsets,      /* [view][NR][3] */
+                            __global const float *patches,    /* [chunk][NR][VW] */
+                            __global const int *chunk_group,
+                            __global const int *chunk_valid,
+                            int n_chunks, int n_groups, float k,
+                            __global float *log_sums)         /* [item][n_groups] */
+{
+    int first = get_global_id(0) * VB;
+    if (first >= n_items) return;
+
+    float xw[VB][NR], w[VB][NR];
+    for (int b = 0; b < VB; ++b) {
+        int item = min(first + b, n_items - 1);   /* spare slots repeat the last item */
+        int voxel = voxels[item / n_views];
+        __global const int *off = offsets + (item % n_views) * NR * 3;
+        for (int r = 0; r < NR; ++r) {
+            int j = neighbour(voxel, Y, X, Z, off + 3 * r);
+            float wr = 1.0f - temp[j];
+            w[b][r] = wr;
+            xw[b][r] = wr * vol[j];
+        }
+    }
+
+    float gmin[VB][NGMAX], gsum[VB][NGMAX];
+    for (int b = 0; b < VB; ++b)
+        for (int g = 0; g < n_groups; ++g) {
+            gmin[b][g] = INFINITY;
+            gsum[b][g] = 0.0f;
+        }
+
+    const intv lane = (intv)(0, 1, 2, 3
+#if VW >= 8
+                             , 4, 5, 6, 7
+#endif
+#if VW == 16
+                             , 8, 9, 10, 11, 12, 13, 14, 15
+#endif
+                             );
+    for (int c = 0; c < n_chunks; ++c) {
+        /* Plain operators, not fma()/vload(): PoCL leaves those builtins as calls. The
+         * chunk is 4*VW-byte aligned (buffers are, and chunks are whole vectors). */
+        __global const floatv *pc = (__global const floatv *)(patches + (size_t)c * NR * VW);
+        /* Named accumulators: an array here would live on the stack, not in registers. */
+        floatv a0 = 0.0f, a1 = 0.0f, a2 = 0.0f, a3 = 0.0f, a4 = 0.0f, a5 = 0.0f, a6 = 0.0f, a7 = 0.0f;
+        for (int r = 0; r < NR; ++r) {
+            floatv p = pc[r];
+#define TERM(b, acc) { floatv d = xw[b][r] - w[b][r] * p; acc += d * d; }
+            TERM(0, a0)
+#if VB > 1
+            TERM(1, a1)
+#endif
+#if VB > 2
+            TERM(2, a2) TERM(3, a3)
+#endif
+#if VB > 4
+            TERM(4, a4) TERM(5, a5) TERM(6, a6) TERM(7, a7)
+#endif
+#undef TERM
+        }
+        int g = chunk_group[c];
+        intv pad = lane >= (intv)(chunk_valid[c]);
+        floatv acc[8] = {a0, a1, a2, a3, a4, a5, a6, a7};
+        for (int b = 0; b < VB; ++b)
+            add_chunk(select(acc[b], (floatv)(INFINITY), pad), k, &gmin[b][g], &gsum[b][g]);
+    }
+
+    for (int b = 0; b < VB && first + b < n_items; ++b)
+        for (int g = 0; g < n_groups; ++g)
+            log_sums[(size_t)(first + b) * n_groups + g] = log(gsum[b][g]) - k * gmin[b][g];
+}
+
+/* log f(label) = log sum_g exp(ls_g - k (label - value_g)^2).
+ * Fast path: with M = max_g ls_g, f = M + log sum_g exp(ls_g - M) * kern[label][g], where
+ * kern = exp(-k (label - value)^2) is tabulated on the host. Where that sum is too small
+ * to trust in float32 (a label far from every likely group), the label is recomputed
+ * exactly, subtracting its own maximum, so no label's value underflows. */
+inline void label_logf(__global const float *ls, int n_groups, __global const float *kern,
+                       __global const float *gval, __global const float *labels, int n_labels,
+                       float k, float *out)
+{
+    float e[NGMAX], M = -INFINITY;
+    for (int g = 0; g < n_groups; ++g) M = fmax(M, ls[g]);
+    for (int g = 0; g < n_groups; ++g) e[g] = exp(ls[g] - M);
+    for (int l = 0; l < n_labels; ++l) {
+        float s = 0.0f;
+        __global const float *row = kern + l * n_groups;
+        for (int g = 0; g < n_groups; ++g) s += e[g] * row[g];
+        if (s > 1e-30f) {
+            out[l] = M + log(s);
+            continue;
+        }
+        float lam = labels[l], mx = -INFINITY;
+        for (int g = 0; g < n_groups; ++g) {
+            float d = lam - gval[g];
+            mx = fmax(mx, ls[g] - k * d * d);
+        }
+        s = 0.0f;
+        for (int g = 0; g < n_groups; ++g) {
+            float d = lam - gval[g];
+            float x = ls[g] - k * d * d - mx;
+            if (x > NEGLIGIBLE) s += exp(x);
+        }
+        out[l] = mx + log(s);
+    }
+}
+
+inline void normalise(float *f, int n)
+{
+    float mx = -INFINITY, s = 0.0f;
+    for (int l = 0; l < n; ++l) mx = fmax(mx, f[l]);
+    for (int l = 0; l < n; ++l) s += exp(f[l] - mx);
+    float lse = mx + log(s);
+    for (int l = 0; l < n; ++l) f[l] -= lse;
+}
+
+/* One ICM decision per voxel from its views' group sums, then the temperature update
+ *   t = max(0, (xi + sum_r t_r) / |N|) over the union of the views' neighbourhoods.
+ * A voxel whose temperature is 0 when visited is an inherited voxel being re-synthesised:
+ * its value may change but its temperature stays 0. Ties go to the lowest label.
+ * heuristic: 0 h2-product, 1 h2-min, 2 h2-max, 3 h1-lowest, 4 h1-highest, 5 h1-mean.
+ */
+__kernel void decide(__global float *vol, __global float *temp, int Z, int Y, int X,
+                     __global const int *voxels, int n_voxels, int n_views,
+                     __global const float *log_sums, int n_groups,
+                     __global const float *group_values, __global const float *kern,
+                     __global const float *labels, int n_labels, float k,
+                     __global const int *union_offsets, int n_union, float xi,
+                     int heuristic)
+{
+    int i = get_global_id(0);
+    if (i >= n_voxels) return;
+    int voxel = voxels[i];
+
+    float f[NVIEW][NLMAX];
+    for (int v = 0; v < n_views; ++v) {
+        label_logf(log_sums + (size_t)(i * n_views + v) * n_groups, n_groups, kern, group_values,
+                   labels, n_labels, k, f[v]);
+        normalise(f[v], n_labels);
+    }
+
+    float value;
+    if (heuristic <= 2) {
+        int best = 0;
+        float best_score = -INFINITY;
+        for (int l = 0; l < n_labels; ++l) {
+            float s = f[0][l];
+            for (int v = 1; v < n_views; ++v)
+                s = heuristic == 0 ? s + f[v][l] : heuristic == 1 ? fmin(s, f[v][l]) : fmax(s, f[v][l]);
+            if (s > best_score) { best_score = s; best = l; }
+        }
+        value = labels[best];
+    } else {
+        float chosen = 0.0f, chosen_p = 0.0f, mean = 0.0f;
+        for (int v = 0; v < n_views; ++v) {
+            int best = 0;
+            for (int l = 1; l < n_labels; ++l)
+                if (f[v][l] > f[v][best]) best = l;
+            float p = f[v][best];
+            mean += labels[best];
+            if (v == 0 || (heuristic == 3 && p < chosen_p) || (heuristic == 4 && p > chosen_p)) {
+                chosen = labels[best];
+                chosen_p = p;
+            }
+        }
+        value = heuristic == 5 ? floor(mean / n_views + 0.5f) : chosen;
+    }
+
+    float t = temp[voxel];
+    if (t > 0.0f) {
+        float total = 0.0f;
+        for (int r = 0; r < n_union; ++r)
+            total += temp[neighbour(voxel, Y, X, Z, union_offsets + 3 * r)];
+        t = fmax(0.0f, (xi + total) / (float)n_union);
+    }
+    vol[voxel] = value;
+    temp[voxel] = t;
+}
