@@ -70,7 +70,7 @@ class CLBackend:
             "volume": n_vox * _F4,
             "temperature": n_vox * _F4,
             "exemplar patches": chunks * nr * self.vw * _F4,
-            "group log-sums": batch * views * n_labels * _F4,
+            "group log-sums": batch * views * self._pad(n_labels) * _F4,
             "voxel indices": batch * _F4,
         }
 
@@ -91,6 +91,9 @@ class CLBackend:
         return _kernels.build(self.device, "ml.cl", {
             "NR": nr, "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
         })
+
+    def _pad(self, n: int) -> int:
+        return -(-n // self.vw) * self.vw
 
     def _global(self, n: int) -> int:
         return -(-max(n, 1) // self.local) * self.local
@@ -135,8 +138,10 @@ class CLBackend:
         self.patches = self._buf(patches)
         self.chunk_group, self.chunk_valid = self._buf(chunk_group), self._buf(chunk_valid)
         self.gvals = self._buf(gvals)
-        kern = np.exp(-((model.labels[:, None] - gvals[None, :].astype(np.float64)) ** 2) / (2.0 * model.bandwidth**2))
-        self.kern = self._buf(kern.astype(np.float32))
+        # Gaussian factor of every (group, label) pair, label rows padded to whole vectors.
+        kern = np.zeros((gvals.size, self._pad(n_labels)), np.float32)
+        kern[:, :n_labels] = np.exp(-((gvals[:, None] - model.labels[None, :]) ** 2) / (2.0 * model.bandwidth**2))
+        self.kern = self._buf(kern)
         self.labels = self._buf(model.labels.astype(np.float32))
         self.offsets = self._buf(model.offsets.astype(np.int32))
         self.union = self._buf(model.union_offsets.astype(np.int32))
@@ -144,7 +149,7 @@ class CLBackend:
         batch = min(self.max_batch, int(np.prod(model.shape)))
         mf = cl.mem_flags
         self.vox_buf = cl.Buffer(self.device.context, mf.READ_ONLY, batch * _F4)
-        self.sums = cl.Buffer(self.device.context, mf.READ_WRITE, batch * views * self.n_groups * _F4)
+        self.sums = cl.Buffer(self.device.context, mf.READ_WRITE, batch * views * self._pad(n_labels) * _F4)
         self.kfactor = np.float32(1.0 / (2.0 * model.bandwidth**2))
         self._temp = np.empty(model.shape, np.float32)
         self._vol = np.empty(model.shape, np.float32)
@@ -199,6 +204,21 @@ class CLBackend:
         import pyopencl as cl
 
         n_items = self._parzen(voxels.astype(np.int32))
-        out = np.empty(n_items * self.n_groups, np.float32)
+        stride = self._pad(self.model.labels.size)
+        out = np.empty(n_items * stride, np.float32)
         cl.enqueue_copy(self.device.queue, out, self.sums)
-        return out.reshape(voxels.size, -1, self.n_groups)
+        return out.reshape(voxels.size, -1, stride)[:, :, : self.n_groups]
+
+    def lcpdf(self, voxels: np.ndarray) -> np.ndarray:
+        """Normalised per-view log LCPDFs ``(views, m, labels)`` at the current state (for tests)."""
+        import pyopencl as cl
+
+        n_items = self._parzen(voxels.astype(np.int32))
+        n_labels = self.model.labels.size
+        out = np.empty(n_items * n_labels, np.float32)
+        buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, out.nbytes)
+        self.k["lcpdf"](self.device.queue, (self._global(n_items),), (self.local,), self.sums,
+                        np.int32(n_items), np.int32(self.n_groups), self.gvals, self.kern, self.labels,
+                        np.int32(n_labels), self.kfactor, buf)
+        cl.enqueue_copy(self.device.queue, out, buf)
+        return out.reshape(voxels.size, -1, n_labels).transpose(1, 0, 2)

@@ -78,7 +78,9 @@ class MLParams:
     max_sweeps: int = 30
     upsampling: str = "1/8"
     inherited: str = "resynthesize"
-    insert_slices: int = 0
+    insert_slices: int = 2
+    initial_temperature: float = 1.0
+    bandwidth_factor: float = 1.0
     bandwidth: tuple[float, ...] | None = field(default=None)
 
     def __post_init__(self):
@@ -99,7 +101,15 @@ class MLParams:
         _choice("upsampling", self.upsampling, UPSAMPLING)
         _choice("inherited", self.inherited, INHERITED)
         _int_in("insert_slices", self.insert_slices, 0)
+        t0 = self.initial_temperature
+        if not (isinstance(t0, numbers.Real) and 0 < t0 <= 1):
+            raise InputError(f"initial_temperature={t0!r} must be in (0, 1] (1 = no confidence, the thesis)")
+        f = self.bandwidth_factor
+        if not (isinstance(f, numbers.Real) and math.isfinite(f) and f > 0):
+            raise InputError(f"bandwidth_factor={f!r} must be a positive number")
         if self.bandwidth is not None:
+            if f != 1.0:
+                raise InputError("give bandwidth or bandwidth_factor, not both")
             bw = self.bandwidth
             bw = (bw,) * self.scales if isinstance(bw, numbers.Real) else tuple(bw)
             if len(bw) != self.scales or not all(

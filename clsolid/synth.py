@@ -105,10 +105,23 @@ def check_shape(shape) -> tuple[int, int, int]:
     return out
 
 
-def insert_slices(vol: np.ndarray, labels_img: np.ndarray, views: tuple[str, ...], count: int) -> None:
-    """``+in``: tile the exemplar onto *count* evenly spaced slices of each constrained view."""
+def slice_depths(size: int, count: int, step: int) -> np.ndarray:
+    """*count* evenly spaced depths on multiples of *step* (so they survive decimation)."""
+    slots = max(1, -(-size // step))
+    return np.unique(np.linspace(0, slots, count, endpoint=False).astype(int)) * step
+
+
+def insert_slices(vol: np.ndarray, labels_img: np.ndarray, views: tuple[str, ...], count: int, step: int) -> np.ndarray:
+    """``+in``: tile the exemplar onto *count* slices of each constrained view.
+
+    Depths are multiples of *step* = 2^(scales-1), so every scale down to the coarsest
+    keeps the slices (decimated like the exemplar). Returns the mask of inserted voxels;
+    they start each scale trusted (t = 0), like inherited voxels: under ICM a voxel at
+    t = 1 ignores its neighbours, so untrusted slices would be overwritten unseen.
+    """
+    mask = np.zeros(vol.shape, bool)
     if count == 0:
-        return
+        return mask
     Z, Y, X = vol.shape
 
     def tiled(rows: int, cols: int) -> np.ndarray:
@@ -117,21 +130,22 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, views: tuple[str, ...
 
     for view in views:
         if view == "front":
-            for z in np.linspace(0, Z, count, endpoint=False).astype(int):
-                vol[z] = tiled(Y, X)
+            for z in slice_depths(Z, count, step):
+                vol[z], mask[z] = tiled(Y, X), True
         elif view == "right":
-            for x in np.linspace(0, X, count, endpoint=False).astype(int):
-                vol[:, :, x] = tiled(Y, Z).T
+            for x in slice_depths(X, count, step):
+                vol[:, :, x], mask[:, :, x] = tiled(Y, Z).T, True
         else:
-            for y in np.linspace(0, Y, count, endpoint=False).astype(int):
-                vol[:, y, :] = tiled(Z, X)
+            for y in slice_depths(Y, count, step):
+                vol[:, y, :], mask[:, y, :] = tiled(Z, X), True
+    return mask
 
 
-def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, params: MLParams):
-    """Volume, temperatures and inherited mask at the start of a scale (§2.7)."""
+def start_state(model: ScaleModel, base: np.ndarray, inserted: np.ndarray, coarse: np.ndarray | None, params: MLParams):
+    """Volume and temperatures at the start of a scale (§2.7); t = 0 marks trusted voxels."""
     step = 2**model.level
     vol = base[::step, ::step, ::step].astype(np.float64)
-    temp = np.ones(model.shape)
+    temp = np.where(inserted[::step, ::step, ::step], 0.0, params.initial_temperature)
     if coarse is not None:
         if params.upsampling == "8/8":
             up = coarse.repeat(2, 0).repeat(2, 1).repeat(2, 2)
@@ -189,13 +203,13 @@ def run_ml(
     backend.prepare(models)  # refuses, before allocating, what the device cannot hold
     clock = _Clock(models)
     base = backend.init_volume(shape, seed, models[0].exemplar)
-    insert_slices(base, labels_img, params.view_names, params.insert_slices)
+    inserted = insert_slices(base, labels_img, params.view_names, params.insert_slices, 2 ** (params.scales - 1))
     resynth = params.inherited == "resynthesize"
     coarse = None
     timings: dict = {"scales": []}
     for i, model in enumerate(models):
         t_scale = time.perf_counter()
-        vol, temp = start_state(model, base, coarse, params)
+        vol, temp = start_state(model, base, inserted, coarse, params)
         inherited = temp == 0
         backend.start_scale(model, vol, temp, params)
         t_init = float(temp.sum())

@@ -9,7 +9,7 @@
  *   NR     neighbours per view (k*k - 1)
  *   VW     exemplar sites per vector (4, 8 or 16)
  *   VB     voxel-views per work item in parzen_groups, 1, 2, 4 or 8 (they share each load)
- *   NGMAX  largest number of centre-value groups
+ *   NGMAX  largest number of centre-value groups (log_sums rows hold NGV*VW, -inf padded)
  *   NLMAX  largest number of labels
  *   NVIEW  number of constrained views (2 or 3)
  */
@@ -19,7 +19,8 @@
 #define CAT(a, b) CAT_(a, b)
 typedef CAT(float, VW) floatv;
 typedef CAT(int, VW) intv;
-#define vloadv CAT(vload, VW)
+#define NLV ((NLMAX + VW - 1) / VW)   /* label vectors */
+#define NGV ((NGMAX + VW - 1) / VW)   /* group vectors */
 
 /* Far below any term that can matter: exp of it is 0 in float32. */
 #define NEGLIGIBLE (-87.0f)
@@ -108,7 +109,7 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
                             __global const int *chunk_group,
                             __global const int *chunk_valid,
                             int n_chunks, int n_groups, float k,
-                            __global float *log_sums)         /* [item][n_groups] */
+                            __global float *log_sums)         /* [item][NGV * VW] */
 {
     int first = get_global_id(0) * VB;
     if (first >= n_items) return;
@@ -170,52 +171,66 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
     }
 
     for (int b = 0; b < VB && first + b < n_items; ++b)
-        for (int g = 0; g < n_groups; ++g)
-            log_sums[(size_t)(first + b) * n_groups + g] = log(gsum[b][g]) - k * gmin[b][g];
+        for (int g = 0; g < NGV * VW; ++g)   /* rows padded to whole vectors with -inf */
+            log_sums[(size_t)(first + b) * NGV * VW + g] = g < n_groups ? log(gsum[b][g]) - k * gmin[b][g] : -INFINITY;
 }
 
-/* log f(label) = log sum_g exp(ls_g - k (label - value_g)^2).
- * Fast path: with M = max_g ls_g, f = M + log sum_g exp(ls_g - M) * kern[label][g], where
- * kern = exp(-k (label - value)^2) is tabulated on the host. Where that sum is too small
- * to trust in float32 (a label far from every likely group), the label is recomputed
- * exactly, subtracting its own maximum, so no label's value underflows. */
-inline void label_logf(__global const float *ls, int n_groups, __global const float *kern,
-                       __global const float *gval, __global const float *labels, int n_labels,
-                       float k, float *out)
+
+inline float vmax_all(const floatv *v, int n)
 {
-    float e[NGMAX], M = -INFINITY;
-    for (int g = 0; g < n_groups; ++g) M = fmax(M, ls[g]);
-    for (int g = 0; g < n_groups; ++g) e[g] = exp(ls[g] - M);
-    for (int l = 0; l < n_labels; ++l) {
-        float s = 0.0f;
-        __global const float *row = kern + l * n_groups;
-        for (int g = 0; g < n_groups; ++g) s += e[g] * row[g];
-        if (s > 1e-30f) {
-            out[l] = M + log(s);
-            continue;
-        }
-        float lam = labels[l], mx = -INFINITY;
-        for (int g = 0; g < n_groups; ++g) {
-            float d = lam - gval[g];
-            mx = fmax(mx, ls[g] - k * d * d);
-        }
-        s = 0.0f;
-        for (int g = 0; g < n_groups; ++g) {
-            float d = lam - gval[g];
-            float x = ls[g] - k * d * d - mx;
-            if (x > NEGLIGIBLE) s += exp(x);
-        }
-        out[l] = mx + log(s);
+    floatv m = v[0];
+    for (int j = 1; j < n; ++j) m = m > v[j] ? m : v[j];
+    return -hmin(-m);
+}
+
+/* Normalised log f_view(label) for every label, as NLV vectors; lanes past n_labels = -inf.
+ *   log f(label) = log sum_g exp(ls_g - k (label - value_g)^2)
+ * Fast path: with M = max_g ls_g, f = M + log sum_g exp(ls_g - M) * kern[g][label], where
+ * kern = exp(-k (label - value)^2) is tabulated on the host ([group][label], padded).
+ * Where that sum is too small to trust in float32 (a label far from every likely group)
+ * the label is recomputed exactly, subtracting its own maximum, so no value underflows.
+ * ls has NGV*VW entries; padding groups hold -inf. */
+inline void view_logf(__global const float *ls, int n_groups, __global const float *kern,
+                      __global const float *gval, __global const float *labels, int n_labels,
+                      float k, floatv *f)
+{
+    floatv e[NGV];
+    for (int j = 0; j < NGV; ++j) e[j] = ((__global const floatv *)ls)[j];
+    float M = vmax_all(e, NGV);
+    for (int j = 0; j < NGV; ++j) e[j] = exp(e[j] - (floatv)(M));
+    const float *es = (const float *)e;
+    for (int j = 0; j < NLV; ++j) f[j] = (floatv)(0.0f);
+    for (int g = 0; g < n_groups; ++g) {
+        __global const floatv *row = (__global const floatv *)(kern + g * NLV * VW);
+        for (int j = 0; j < NLV; ++j) f[j] += es[g] * row[j];
     }
-}
-
-inline void normalise(float *f, int n)
-{
-    float mx = -INFINITY, s = 0.0f;
-    for (int l = 0; l < n; ++l) mx = fmax(mx, f[l]);
-    for (int l = 0; l < n; ++l) s += exp(f[l] - mx);
-    float lse = mx + log(s);
-    for (int l = 0; l < n; ++l) f[l] -= lse;
+    float *fs = (float *)f;
+    for (int l = 0; l < NLV * VW; ++l) {
+        float s = fs[l];
+        if (l >= n_labels) {
+            fs[l] = -INFINITY;
+        } else if (s > 1e-30f) {
+            fs[l] = M + log(s);
+        } else {
+            float lam = labels[l], mx = -INFINITY;
+            for (int g = 0; g < n_groups; ++g) {
+                float d = lam - gval[g], x = ls[g] - k * d * d;
+                mx = x > mx ? x : mx;
+            }
+            s = 0.0f;
+            for (int g = 0; g < n_groups; ++g) {
+                float d = lam - gval[g], x = ls[g] - k * d * d - mx;
+                if (x > NEGLIGIBLE) s += exp(x);
+            }
+            fs[l] = mx + log(s);
+        }
+    }
+    /* normalise over the labels (eq. 4.4) */
+    float mx = vmax_all(f, NLV);
+    floatv acc = (floatv)(0.0f);
+    for (int j = 0; j < NLV; ++j) acc += exp(f[j] - (floatv)(mx));
+    float lse = mx + log(hsum(acc));
+    for (int j = 0; j < NLV; ++j) f[j] -= (floatv)(lse);
 }
 
 /* One ICM decision per voxel from its views' group sums, then the temperature update
@@ -236,31 +251,36 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
     if (i >= n_voxels) return;
     int voxel = voxels[i];
 
-    float f[NVIEW][NLMAX];
-    for (int v = 0; v < n_views; ++v) {
-        label_logf(log_sums + (size_t)(i * n_views + v) * n_groups, n_groups, kern, group_values,
-                   labels, n_labels, k, f[v]);
-        normalise(f[v], n_labels);
-    }
+    floatv fv[NVIEW][NLV];
+    for (int v = 0; v < n_views; ++v)
+        view_logf(log_sums + (size_t)(i * n_views + v) * NGV * VW, n_groups, kern, group_values,
+                  labels, n_labels, k, fv[v]);
 
     float value;
     if (heuristic <= 2) {
-        int best = 0;
-        float best_score = -INFINITY;
-        for (int l = 0; l < n_labels; ++l) {
-            float s = f[0][l];
-            for (int v = 1; v < n_views; ++v)
-                s = heuristic == 0 ? s + f[v][l] : heuristic == 1 ? fmin(s, f[v][l]) : fmax(s, f[v][l]);
-            if (s > best_score) { best_score = s; best = l; }
+        /* combine the views label by label, vector-wise, then take the first maximum */
+        floatv comb[NLV];
+        for (int j = 0; j < NLV; ++j) {
+            floatv c = fv[0][j];
+            for (int v = 1; v < n_views; ++v) {
+                floatv o = fv[v][j];
+                c = heuristic == 0 ? c + o : heuristic == 1 ? (c < o ? c : o) : (c > o ? c : o);
+            }
+            comb[j] = c;
         }
+        const float *cs = (const float *)comb;
+        int best = 0;
+        for (int l = 1; l < n_labels; ++l)
+            if (cs[l] > cs[best]) best = l;
         value = labels[best];
     } else {
         float chosen = 0.0f, chosen_p = 0.0f, mean = 0.0f;
         for (int v = 0; v < n_views; ++v) {
+            const float *fs = (const float *)fv[v];
             int best = 0;
             for (int l = 1; l < n_labels; ++l)
-                if (f[v][l] > f[v][best]) best = l;
-            float p = f[v][best];
+                if (fs[l] > fs[best]) best = l;
+            float p = fs[best];
             mean += labels[best];
             if (v == 0 || (heuristic == 3 && p < chosen_p) || (heuristic == 4 && p > chosen_p)) {
                 chosen = labels[best];
@@ -275,8 +295,23 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
         float total = 0.0f;
         for (int r = 0; r < n_union; ++r)
             total += temp[neighbour(voxel, Y, X, Z, union_offsets + 3 * r)];
-        t = fmax(0.0f, (xi + total) / (float)n_union);
+        t = (xi + total) / (float)n_union;
+        t = t > 0.0f ? t : 0.0f;
     }
     vol[voxel] = value;
     temp[voxel] = t;
+}
+
+/* The normalised per-label log LCPDF of each voxel-view (for tests and diagnostics):
+ * out[item][label], with the same code path as decide. */
+__kernel void lcpdf(__global const float *log_sums, int n_items, int n_groups,
+                    __global const float *group_values, __global const float *kern,
+                    __global const float *labels, int n_labels, float k, __global float *out)
+{
+    int i = get_global_id(0);
+    if (i >= n_items) return;
+    floatv f[NLV];
+    view_logf(log_sums + (size_t)i * NGV * VW, n_groups, kern, group_values, labels, n_labels, k, f);
+    const float *fs = (const float *)f;
+    for (int l = 0; l < n_labels; ++l) out[(size_t)i * n_labels + l] = fs[l];
 }

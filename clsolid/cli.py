@@ -1,0 +1,240 @@
+"""Command-line runner: ``clsolid devices``, ``clsolid synth``, ``clsolid evaluate``.
+
+Exit codes: 0 success, 2 usage or input error, 3 no OpenCL device, 4 device out of
+memory, 5 kernel build failure, 1 anything unexpected (traceback with ``--debug``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import sys
+import time
+from pathlib import Path
+
+from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
+from .params import HEURISTICS, INHERITED, UPSAMPLING
+
+EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
+_EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
+            (DeviceMemoryError, EXIT_MEMORY), (KernelBuildError, EXIT_BUILD))
+
+
+def _levels(text: str) -> int | None:
+    if text.lower() in ("all", "none"):
+        return None
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--levels must be an integer or 'all', not {text!r}") from None
+
+
+def _add_synth(sub) -> None:
+    p = sub.add_parser("synth", help="grow a volume from a 2D exemplar",
+                       description="Grow a solid texture whose slices look like EXEMPLAR (NP-MRF maximum likelihood).")
+    p.add_argument("exemplar", nargs="?", default="brick",
+                   help="image (.png/.tif/.npy) or built-in name: brick, grass, gravel (default: brick)")
+    p.add_argument("-o", "--output", required=True, type=Path, help="volume to write: .tif (ImageJ, ZYX) or .npy")
+    p.add_argument("--shape", nargs=3, type=int, default=(64, 64, 64), metavar=("Z", "Y", "X"),
+                   help="volume size (default 64 64 64)")
+    p.add_argument("--method", default="ml", help="synthesis method (only 'ml' so far)")
+    p.add_argument("--heuristic", default="h2-product",
+                   help=f"view combination: {', '.join(HEURISTICS)} or a thesis/paper tag (default h2-product)")
+    p.add_argument("--neighborhood", type=int, default=9, help="odd window size per view (default 9)")
+    p.add_argument("--scales", type=int, default=3, help="decimation scales (default 3)")
+    p.add_argument("--views", type=int, default=2, choices=(2, 3), help="constrained views (default 2)")
+    p.add_argument("--levels", type=_levels, default=32, help="grey levels, or 'all' for 8-bit (default 32)")
+    p.add_argument("--xi", type=float, default=-3.0, help="cooling parameter xi < 0 (default -3)")
+    p.add_argument("--stop-fraction", type=float, default=0.95,
+                   help="stop a scale when the global temperature fell by this fraction (default 0.95)")
+    p.add_argument("--max-sweeps", type=int, default=30, help="most sweeps per scale (default 30)")
+    p.add_argument("--upsampling", choices=UPSAMPLING, default="1/8", help="coarse-to-fine copy (default 1/8)")
+    p.add_argument("--inherited", choices=INHERITED, default="resynthesize",
+                   help="voxels from the coarser scale: re-synthesised with t=0, or fixed (default resynthesize)")
+    p.add_argument("--insert-slices", type=int, default=None,
+                   help="exemplar slices inserted per constrained view, trusted (+in); 0 = noise only (-in)")
+    p.add_argument("--initial-temperature", type=float, default=1.0,
+                   help="temperature of non-trusted voxels at the start of a scale (default 1, the thesis)")
+    p.add_argument("--bandwidth", type=float, nargs="+", default=None,
+                   help="Parzen bandwidth: one value, or one per scale finest first (default: Silverman per scale)")
+    p.add_argument("--bandwidth-factor", type=float, default=None,
+                   help="multiply Silverman's bandwidth by this factor")
+    p.add_argument("--builtin-size", type=int, default=64, help="side of a built-in exemplar (default 64)")
+    p.add_argument("--seed", type=int, default=None, help="random seed (default: fresh, recorded in the sidecar)")
+    p.add_argument("--device", default=None,
+                   help="OpenCL device: PYOPENCL_CTX syntax ('0:1'), a name ('pocl', 'H100'), cpu/gpu, or 'reference'")
+    p.add_argument("--voxel-size", type=float, nargs="+", default=None, metavar="SIZE",
+                   help="voxel size for the TIFF (one value, or Z Y X)")
+    p.add_argument("--unit", default="um", help="unit of --voxel-size (default um)")
+    p.add_argument("--preview", type=Path, default=None, help="PNG: exemplar beside three orthogonal mid-slices")
+    p.add_argument("--track", type=Path, default=None,
+                   help="JSON recording the evaluation indicators after every sweep (convergence curves)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+
+
+def _add_devices(sub) -> None:
+    sub.add_parser("devices", help="list OpenCL devices", description="List every OpenCL device clsolid can use.")
+
+
+def _add_evaluate(sub) -> None:
+    from .report import add_evaluate_arguments
+
+    p = sub.add_parser("evaluate", help="compare a volume's slices with an exemplar",
+                       description="Objective statistics between a 2D exemplar and the slices of a volume.")
+    add_evaluate_arguments(p)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="clsolid", description="Solid textures from a 2D exemplar, on OpenCL.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    _add_synth(sub)
+    _add_devices(sub)
+    _add_evaluate(sub)
+    return parser
+
+
+def _fmt_time(s: float) -> str:
+    if s != s:  # NaN: not known yet
+        return "?"
+    return f"{s:.0f}s" if s < 120 else f"{s / 60:.1f}min"
+
+
+def render_progress(info) -> None:
+    """One stderr line per sweep: scale, sweep, global temperature, elapsed, ETA."""
+    z, y, x = info.shape
+    print(f"scale {info.scale}/{info.n_scales} ({z}x{y}x{x})  sweep {info.sweep:>2}  "
+          f"T={info.temperature:.0f} (stop at {info.target:.0f})  visited {info.visited}  "
+          f"elapsed {_fmt_time(info.elapsed)}  ETA {_fmt_time(info.eta)}", file=sys.stderr, flush=True)
+
+
+def versions() -> dict:
+    import numpy
+    import pyopencl
+
+    from . import __version__
+
+    return {"clsolid": __version__, "numpy": numpy.__version__, "pyopencl": pyopencl.VERSION_TEXT,
+            "python": platform.python_version(), "platform": platform.platform()}
+
+
+def _bandwidth(args) -> tuple[float, ...] | None:
+    if args.bandwidth_factor is None:
+        return tuple(args.bandwidth) if args.bandwidth else None
+    if args.bandwidth:
+        raise InputError("give --bandwidth or --bandwidth-factor, not both")
+    return ("factor", args.bandwidth_factor)
+
+
+def _tracker(path: Path, exemplar_holder: dict, records: list):
+    """A progress hook that evaluates the block after every sweep (``--track``)."""
+    from . import metrics
+
+    def track(info) -> None:
+        vol = info.volume().astype(float)
+        ex = exemplar_holder["exemplar"][:: 2 ** (info.n_scales - info.scale), :: 2 ** (info.n_scales - info.scale)]
+        ind = {}
+        for view in ("front", "right"):
+            sl = metrics.view_slices(vol, view, max_slices=8)
+            ind[f"autocorrelation_{view}"] = float(metrics.autocorrelation_distance(ex, sl))
+            ind[f"histogram_kl_{view}"] = float(metrics.histogram_distance(ex, sl, bins=32,
+                                                                           value_range=(0, exemplar_holder["levels"])))
+        records.append({"scale": info.scale, "sweep": info.sweep, "temperature": info.temperature,
+                        "elapsed": info.elapsed, "indicators": ind})
+
+    return track
+
+
+def cmd_synth(args) -> int:
+    from .api import synthesize
+    from .exemplar import load_exemplar, quantise
+    from .volumeio import save_preview, save_volume
+
+    suffix = args.output.suffix.lower()
+    if suffix not in (".tif", ".tiff", ".npy"):
+        raise InputError(f"--output {args.output} must end in .tif, .tiff or .npy")
+    if args.preview is not None and args.preview.suffix.lower() != ".png":
+        raise InputError(f"--preview {args.preview} must end in .png")
+    voxel_size = None
+    if args.voxel_size is not None:
+        if len(args.voxel_size) not in (1, 3):
+            raise InputError(f"--voxel-size takes one value or three (Z Y X), not {len(args.voxel_size)}")
+        voxel_size = args.voxel_size[0] if len(args.voxel_size) == 1 else tuple(args.voxel_size)
+    options = dict(xi=args.xi, stop_fraction=args.stop_fraction, max_sweeps=args.max_sweeps,
+                   upsampling=args.upsampling, inherited=args.inherited,
+                   initial_temperature=args.initial_temperature, builtin_size=args.builtin_size)
+    if args.insert_slices is not None:
+        options["insert_slices"] = args.insert_slices
+    bw = _bandwidth(args)
+    if bw is not None and bw[0] == "factor":
+        options["bandwidth_factor"] = bw[1]
+    elif bw is not None:
+        options["bandwidth"] = bw
+    hooks = [] if args.quiet else [render_progress]
+    records: list = []
+    holder: dict = {}
+    if args.track is not None:
+        holder["levels"] = 256 if args.levels is None else args.levels
+        holder["exemplar"] = quantise(load_exemplar(args.exemplar, builtin_size=args.builtin_size), args.levels)
+        hooks.append(_tracker(args.track, holder, records))
+    result = synthesize(args.exemplar, tuple(args.shape), method=args.method, heuristic=args.heuristic,
+                        neighborhood=args.neighborhood, scales=args.scales, views=args.views,
+                        levels=args.levels, rng=args.seed, device=args.device,
+                        progress=(lambda info: [h(info) for h in hooks]) if hooks else None,
+                        full_output=True, **options)
+    written = save_volume(args.output, result.volume, voxel_size=voxel_size, unit=args.unit,
+                          metadata={"seed": result.seed, "levels": int(result.level_values.size)})
+    sidecar = written.with_suffix(".json")
+    meta = {"volume": str(written), "exemplar": str(args.exemplar) if not hasattr(args.exemplar, "shape") else "array",
+            "seed": result.seed, "device": result.device, "params": result.params,
+            "level_values": result.level_values.tolist(), "voxel_size": voxel_size, "unit": args.unit,
+            "versions": versions(), "timings": result.timings,
+            "command": " ".join(sys.argv), "written_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+    sidecar.write_text(json.dumps(meta, indent=2, default=float))
+    if args.preview is not None:
+        save_preview(args.preview, result.exemplar, result.volume, levels=int(result.level_values.size))
+    if args.track is not None:
+        args.track.parent.mkdir(parents=True, exist_ok=True)
+        args.track.write_text(json.dumps({"exemplar": str(args.exemplar), "seed": result.seed,
+                                          "records": records}, indent=2))
+    if not args.quiet:
+        print(f"wrote {written} ({'x'.join(map(str, result.volume.shape))}, seed {result.seed}, "
+              f"{result.timings['total_s']:.1f}s on {result.device}) and {sidecar}", file=sys.stderr)
+    return EXIT_OK
+
+
+def cmd_devices(args) -> int:
+    from .device import list_devices
+
+    devices = list_devices()
+    print(f"{'index':<6} {'type':<5} {'CUs':>4} {'memory':>10} {'max buffer':>11} {'fp64':<4}  platform / name")
+    for d in devices:
+        print(f"{d['index']:<6} {d['type'][:5]:<5} {d['compute_units']:>4} {d['global_mem'] / 2**30:>8.1f}Gi "
+              f"{d['max_alloc'] / 2**30:>9.2f}Gi {'yes' if d['fp64'] else 'no':<4}  {d['platform']} / {d['name']}")
+    return EXIT_OK
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``clsolid`` command; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command == "evaluate":
+        from .report import main_evaluate
+
+        return main_evaluate(args)
+    command = {"synth": cmd_synth, "devices": cmd_devices}[args.command]
+    try:
+        return command(args)
+    except ClsolidError as exc:
+        if getattr(args, "debug", False):
+            raise
+        print(f"clsolid: error: {exc}", file=sys.stderr)
+        return next((code for cls, code in _EXIT_OF if isinstance(exc, cls)), EXIT_FAIL)
+    except KeyboardInterrupt:
+        print("clsolid: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

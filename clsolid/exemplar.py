@@ -1,0 +1,280 @@
+"""Exemplars: the 2D grey images a solid texture is synthesised from.
+
+Three built-in exemplars come from scikit-image's bundled CC0 textures. Any
+other exemplar is a numpy array or an image file; it is validated here so that
+the synthesis code can assume a finite, real, non-empty 2D array.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+import skimage.data
+
+from .errors import InputError
+from .volumeio import VOLUME_WRITE_SUFFIXES, _read_any
+
+#: Names accepted by :func:`builtin_exemplar` (scikit-image's 512x512 CC0 textures).
+BUILTINS = ("brick", "grass", "gravel")
+#: File extensions accepted by :func:`load_exemplar` (matched in any case).
+EXEMPLAR_SUFFIXES = (".png",) + VOLUME_WRITE_SUFFIXES
+_BUILTIN_SIDE = 512
+_DEFAULT_REGION = 256
+
+
+def _check_int(value: Any, param: str, lo: int, hi: int, hint: str) -> int:
+    """``value`` must be an integer (not a bool) in ``[lo, hi]``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
+        raise InputError(f"{param} must be an integer in [{lo}, {hi}], got {value!r}; {hint}")
+    return int(value)
+
+
+def _area_weights(n_in: int, n_out: int) -> np.ndarray:
+    """``(n_out, n_in)`` matrix averaging input pixels over each output pixel's footprint.
+
+    Output pixel ``i`` covers ``[i * r, (i + 1) * r)`` in input pixel units, with
+    ``r = n_in / n_out``; each input pixel is weighted by the length it shares
+    with that interval, so every row sums to one.
+    """
+    r = n_in / n_out
+    starts = np.arange(n_out)[:, None] * r
+    left = np.maximum(starts, np.arange(n_in)[None, :])
+    right = np.minimum(starts + r, np.arange(n_in)[None, :] + 1)
+    return np.clip(right - left, 0.0, None) / r
+
+
+def _area_downscale(image: np.ndarray, size: int) -> np.ndarray:
+    """Area-average a square image down to ``size`` x ``size``."""
+    n = image.shape[0]
+    if n % size == 0:
+        # Exact block mean: the common case (256 -> 64) needs no interpolation at all.
+        k = n // size
+        return image.reshape(size, k, size, k).mean(axis=(1, 3))
+    w = _area_weights(n, size)
+    return w @ image @ w.T
+
+
+def builtin_exemplar(name: str, *, size: int = 64, region: int = _DEFAULT_REGION) -> np.ndarray:
+    """One of scikit-image's bundled textures, cropped and area-averaged.
+
+    Parameters
+    ----------
+    name : {"brick", "grass", "gravel"}
+        Which texture (``skimage.data.brick()`` etc., 512x512, CC0).
+    size : int, default 64
+        Side of the returned square exemplar, ``1 <= size <= region``.
+    region : int, default 256
+        Side of the top-left square crop taken first, ``region <= 512``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(size, size)`` float64 on the original 0..255 grey scale.
+
+    Raises
+    ------
+    InputError
+        Unknown ``name``, or ``size``/``region`` out of range.
+
+    Notes
+    -----
+    A plain 64x64 crop holds barely one brick, so a larger region is averaged
+    down instead. When ``region`` is a multiple of ``size`` this is an exact
+    block mean (the default is 4x4 blocks); otherwise every output pixel is
+    the area-weighted mean of the input pixels its footprint overlaps.
+    """
+    if not isinstance(name, str) or name not in BUILTINS:
+        raise InputError(
+            f"name {name!r} is not a built-in exemplar; use one of {', '.join(BUILTINS)}"
+        )
+    region = _check_int(region, "region", 1, _BUILTIN_SIDE, f"the built-in textures are {_BUILTIN_SIDE} px wide")
+    size = _check_int(size, "size", 1, region, f"size must not exceed region ({region}); lower size or raise region")
+    crop = getattr(skimage.data, name)()[:region, :region].astype(np.float64)
+    return _area_downscale(crop, size)
+
+
+def _reject_colour_or_volume(shape: tuple[int, ...]) -> None:
+    """Explain why a 3D array is not a usable exemplar."""
+    last = shape[-1]
+    if last in (3, 4):
+        raise InputError(
+            f"exemplar has shape {shape}, a colour (RGB/RGBA) image; colour exemplars are not supported yet, "
+            "convert it to grey first (e.g. skimage.color.rgb2gray(image))"
+        )
+    if last == 2:
+        raise InputError(
+            f"exemplar has shape {shape}, a grey image with an alpha channel; drop the alpha channel "
+            "(image[..., 0])"
+        )
+    raise InputError(
+        f"exemplar has shape {shape}, which looks like a 3D volume; the exemplar must be one 2D image, "
+        "pass a single slice (e.g. volume[0])"
+    )
+
+
+def _check_exemplar_array(data: np.ndarray) -> np.ndarray:
+    """Validate an exemplar array; return it 2D, native byte order, as its own copy."""
+    if data.ndim == 3 and data.shape[-1] == 1:
+        data = data[..., 0]
+    if data.ndim == 3 and data.shape[0] == 1:
+        data = data[0]  # a one-slice stack is a 2D image
+    if data.ndim == 3:
+        _reject_colour_or_volume(data.shape)
+    if data.ndim != 2:
+        raise InputError(
+            f"exemplar must be a 2D grey image, got a {data.ndim}D array of shape {data.shape}; "
+            "pass a (height, width) array"
+        )
+    if data.size == 0:
+        raise InputError(f"exemplar is empty (shape {data.shape}); both dimensions must be at least 1")
+    if data.dtype.kind not in "iuf":
+        raise InputError(
+            f"exemplar has unsupported dtype {data.dtype}; use an integer or float grey image "
+            "(e.g. image.astype(np.uint8) for a bool mask)"
+        )
+    if data.dtype.kind == "f" and not np.isfinite(data).all():
+        raise InputError(
+            f"exemplar contains {int(np.count_nonzero(~np.isfinite(data)))} NaN or infinite values; "
+            "replace them (e.g. numpy.nan_to_num) before using the image"
+        )
+    # Native byte order: the array is later copied byte for byte to the device.
+    return np.array(data, dtype=data.dtype.newbyteorder("="), order="C")
+
+
+def _load_string(source: str, builtin_size: int) -> np.ndarray:
+    """A string is a built-in name or a file path."""
+    if source in BUILTINS:
+        return builtin_exemplar(source, size=builtin_size)
+    if not os.path.exists(source) and os.path.splitext(source)[1].lower() not in EXEMPLAR_SUFFIXES:
+        raise InputError(
+            f"exemplar {source!r} is neither an existing file nor a built-in exemplar name; pass a path to a "
+            f"{'/'.join(EXEMPLAR_SUFFIXES)} file or one of {', '.join(BUILTINS)}"
+        )
+    return _load_file(source)
+
+
+def _load_file(path: str | os.PathLike) -> np.ndarray:
+    """Read an exemplar file as stored, then validate it."""
+    data, _ = _read_any(path, "exemplar")
+    return _check_exemplar_array(data)
+
+
+def load_exemplar(source: Any, *, builtin_size: int = 64) -> np.ndarray:
+    """Load and validate an exemplar.
+
+    Parameters
+    ----------
+    source : numpy.ndarray, str or os.PathLike
+        A 2D array; a path to a ``.png``, ``.tif``, ``.tiff`` or ``.npy`` file
+        (extension in any case); or a built-in name (see :data:`BUILTINS`).
+        A trailing singleton channel axis ``(H, W, 1)`` and a leading
+        singleton axis ``(1, H, W)`` are squeezed away.
+    builtin_size : int, default 64
+        Side of a built-in exemplar (``builtin_exemplar(name, size=...)``),
+        in ``[1, 256]``.
+
+    Returns
+    -------
+    numpy.ndarray
+        A 2D C-contiguous copy in native byte order that keeps the source dtype
+        and units: uint8 stays 0..255, uint16 stays 0..65535, floats are
+        unchanged. Keeping the dtype lets ``quantise(image, levels=None)`` see
+        that an image is 8-bit. Built-ins are float64 on the 0..255 scale.
+
+    Raises
+    ------
+    InputError
+        Missing, unreadable or unsupported file; unknown name; colour image,
+        3D volume or other non-2D shape; empty array; bool, complex, object,
+        string or other non-numeric dtype; NaN or infinite values.
+    """
+    builtin_size = _check_int(
+        builtin_size, "builtin_size", 1, _DEFAULT_REGION,
+        f"built-ins are averaged from a {_DEFAULT_REGION} px region; for larger ones call builtin_exemplar",
+    )
+    if isinstance(source, np.ndarray):
+        return _check_exemplar_array(source)
+    if isinstance(source, str):
+        return _load_string(source, builtin_size)
+    if isinstance(source, os.PathLike):
+        return _load_file(source)
+    raise InputError(
+        f"exemplar must be a numpy array, a file path or a built-in name, got {type(source).__name__}; "
+        "pass np.asarray(...) for array-like data"
+    )
+
+
+def _check_levels(levels: Any) -> int:
+    """``levels`` must be an integer in [2, 65536]."""
+    return _check_int(levels, "levels", 2, 65536, "pass the number of grey levels, e.g. levels=32")
+
+
+def _scaled_floor(image: np.ndarray, lo: Any, hi: Any, levels: int) -> np.ndarray:
+    """``floor((image - lo) / (hi - lo) * levels)`` for ``hi > lo``, exact for integers."""
+    if image.dtype.kind in "iu":
+        lo_i, hi_i = int(lo), int(hi)
+        if (hi_i - lo_i) * levels < 2**62:
+            # Integer arithmetic avoids float rounding just below a level boundary.
+            shifted = image.astype(np.int64) - lo_i
+            return shifted * levels // (hi_i - lo_i)
+    x = image.astype(np.float64)
+    lo_f, hi_f = float(lo), float(hi)
+    # Halving both ends keeps the span finite for extreme float ranges.
+    t = (x / 2 - lo_f / 2) / (hi_f / 2 - lo_f / 2)
+    return np.floor(t * levels)
+
+
+def quantise(image: np.ndarray, levels: int | None = 32) -> np.ndarray:
+    """Uniformly quantise a grey image to integer labels.
+
+    Parameters
+    ----------
+    image : numpy.ndarray
+        Real-valued, finite, non-empty array (any number of dimensions).
+    levels : int or None, default 32
+        Number of grey levels, in ``[2, 65536]``. ``None`` keeps every level
+        of an 8-bit image and is only accepted for ``uint8`` input.
+
+    Returns
+    -------
+    numpy.ndarray
+        int32 labels of the same shape, in ``[0, levels - 1]``.
+
+    Raises
+    ------
+    InputError
+        Bad ``levels`` (bools rejected), ``levels=None`` with non-uint8 input,
+        or an invalid ``image``.
+
+    Notes
+    -----
+    The image's own ``[min, max]`` is mapped linearly onto ``[0, levels)``:
+    ``label = floor((v - min) / (max - min) * levels)``, with ``v = max``
+    clipped to ``levels - 1``. An image that spans its range thus uses the
+    first and last levels, the mapping is monotone, and a constant image gives
+    all zeros. With ``levels=None`` the uint8 values themselves are the
+    labels (0..255), independent of the image's range.
+    """
+    if not isinstance(image, np.ndarray):
+        raise InputError(f"image must be a numpy array, got {type(image).__name__}; pass np.asarray(image)")
+    if image.size == 0:
+        raise InputError(f"image is empty (shape {image.shape}); pass a non-empty array")
+    if image.dtype.kind not in "iuf":
+        raise InputError(f"image has unsupported dtype {image.dtype}; use an integer or float grey image")
+    if image.dtype.kind == "f" and not np.isfinite(image).all():
+        raise InputError("image contains NaN or infinite values; replace them before quantising")
+    if levels is None:
+        if image.dtype != np.uint8:
+            raise InputError(
+                f"levels=None keeps the 256 levels of an 8-bit image, but image has dtype {image.dtype}; "
+                "pass an integer levels (e.g. levels=32) or convert the image to uint8"
+            )
+        return image.astype(np.int32)
+    levels = _check_levels(levels)
+    lo, hi = image.min(), image.max()
+    if not hi > lo:
+        return np.zeros(image.shape, dtype=np.int32)
+    labels = _scaled_floor(image, lo, hi, levels)
+    return np.clip(labels, 0, levels - 1).astype(np.int32)

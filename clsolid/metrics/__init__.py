@@ -1,0 +1,28 @@
+"""Metrics comparing a solid texture's slices with its 2D exemplar, view by view.
+
+Views of a (Z, Y, X) volume: ``front`` = the (y, x) planes ``volume[z]``; ``right`` = the
+(z, y) planes ``volume[:, :, x].T`` (rows = y, columns = z); ``top`` = the (z, x) planes
+``volume[:, y, :]`` (rows = z, columns = x). :func:`evaluate` computes every metric per view,
+each distance with a floor (two halves of the exemplar) and a ceiling (shuffled pixels or
+noise), and says where a distance cannot tell these apart. The building blocks are public
+so that tests and the engine can use them directly.
+"""
+
+from ._common import VIEWS, symmetric_kl, view_slices, wasserstein_1d
+from .autocorr import autocorrelation, autocorrelation_distance
+from .evaluate import evaluate
+from .firstorder import first_order_stats, histogram_distance, quantise
+from .fringes import Fringes, fringe_distances, trace_fringes
+from .orientation import (OrientationField, dominant_orientation_deg, orientation_distance,
+                          orientation_histogram, structure_tensor_orientation)
+from .patches import patch_distance
+from .phases import chord_lengths, lineal_path, two_point_correlation, volume_fractions
+
+__all__ = [
+    "VIEWS", "evaluate", "view_slices", "first_order_stats", "quantise", "histogram_distance",
+    "symmetric_kl", "wasserstein_1d", "autocorrelation", "autocorrelation_distance",
+    "structure_tensor_orientation", "OrientationField", "orientation_histogram",
+    "dominant_orientation_deg", "orientation_distance", "trace_fringes", "Fringes",
+    "fringe_distances", "patch_distance", "volume_fractions", "two_point_correlation",
+    "lineal_path", "chord_lengths",
+]

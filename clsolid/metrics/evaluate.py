@@ -1,0 +1,207 @@
+"""``evaluate``: every metric, per view, on a readable scale (floor and ceiling)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from . import autocorr, fringes, orientation, patches, phases, references
+from ._common import (DEFAULT_CONSTRAINED, PSEUDO_COUNT, VIEWS, as_image, as_volume, check_int,
+                      check_views, jsonable, slice_indices, view_slices)
+from .families import Family, Setup, make_families, make_setup
+from .firstorder import first_order_stats
+
+FORMAT_VERSION = 1
+#: Most slices per ceiling repeat. The ceiling uses as many slices as the view (up to this),
+#: so that its sampling noise matches the measured value's.
+CEILING_SLICES = 16
+#: Smallest exemplar side evaluate accepts (its halves must still hold some texture).
+MIN_EXEMPLAR_SIDE = 16
+MIN_VOLUME_SIDE = 8
+
+
+def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any = DEFAULT_CONSTRAINED,
+             levels: int | None = None, max_slices: int | None = 16, rng: Any = 0,
+             reference_repeats: int = 5, periodic: bool = True) -> dict[str, Any]:
+    """Compare a volume's slices with the exemplar, view by view, with reference scales.
+
+    Parameters
+    ----------
+    exemplar : array_like, 2D
+        The exemplar (at least 16 x 16; treated as non-periodic).
+    volume : array_like, (Z, Y, X)
+        The synthesised volume (every side at least 8).
+    views : sequence of {"front", "right", "top"}
+        Views to report (see :func:`view_slices` for their orientation).
+    constrained : sequence of view names
+        Views the synthesis constrained; only used to label the report.
+    levels : int or None
+        Quantise exemplar and volume into this many equal-width classes over the
+        exemplar's range before the histogram statistics (and the few-phase analysis);
+        None: use the grey levels as they are.
+    max_slices : int or None
+        Slices per view, evenly spaced (see :func:`view_slices`); None: all of them.
+    rng : int, numpy.random.Generator or None
+        Seeds the random halves, shuffles, noise and patch subsampling.
+    reference_repeats : int
+        Number of random halves and of shuffles/noise draws per reference (0 skips the
+        references, then no distance is judged informative and no score is given).
+    periodic : bool
+        Whether the volume wraps around (the engine's volumes do); used by the
+        orientation and fringe analyses at the slices' borders.
+
+    Returns
+    -------
+    dict
+        JSON-able report: ``settings`` (every choice made), ``exemplar``, ``volume``,
+        ``views`` (per view: constrained flag, first-order statistics, ``distances`` each
+        with ``value``, ``floor``, ``ceiling``, ``informative``, ``score``, ``note``, and the
+        curves behind them) and ``summary`` (one row per view and distance).
+    """
+    ex = as_image(exemplar, "exemplar", min_side=MIN_EXEMPLAR_SIDE)
+    vol = as_volume(volume, "volume", min_side=MIN_VOLUME_SIDE)
+    views = check_views(views, "views")
+    constrained = check_views(constrained, "constrained", allow_empty=True)
+    levels = check_int(levels, "levels", 2, allow_none=True)
+    max_slices = check_int(max_slices, "max_slices", 1, allow_none=True)
+    repeats = check_int(reference_repeats, "reference_repeats", 0)
+    if repeats == 1:
+        raise InputError("reference_repeats=1 cannot measure a spread; use 0 (no references) or >= 2")
+    gen = np.random.default_rng(rng)
+    stacks = {v: view_slices(vol, v, max_slices).astype(np.float64) for v in views}
+    setup = make_setup(ex, (float(vol.min()), float(vol.max())), [s.shape[1:] for s in stacks.values()],
+                       periodic=bool(periodic), levels=levels, rng=gen)
+    families, skipped = make_families(setup)
+    ex_features = {f.name: f.features(ex[None], False) for f in families}
+    floors = _floors(families, setup, gen, repeats)
+    ceilings: dict[tuple, dict] = {}
+    report_views = {}
+    for view, stack in stacks.items():
+        key = (stack.shape[1:], min(len(stack), CEILING_SLICES))
+        if key not in ceilings:
+            ceilings[key] = _ceilings(families, setup, ex_features, key, gen, repeats)
+        report_views[view] = _view_report(view, vol.shape, stack, max_slices, view in constrained, families,
+                                          setup, ex_features, floors, ceilings[key])
+    report = {
+        "format": "clsolid-metrics", "version": FORMAT_VERSION,
+        "settings": _settings(setup, views, constrained, max_slices, rng, repeats, skipped),
+        "exemplar": {"shape": list(ex.shape), "stats": first_order_stats(setup.grey(ex))},
+        "volume": {"shape": list(vol.shape), "dtype": str(vol.dtype)},
+        "views": report_views,
+        "summary": _summary(report_views),
+    }
+    return jsonable(report)
+
+
+def _floors(families: list[Family], setup: Setup, gen: np.random.Generator,
+            repeats: int) -> dict[str, list[tuple[float | None, int, int]]]:
+    """Each distance between the two parts of ``repeats`` random halves, with their sizes."""
+    out: dict[str, list] = {d.key: [] for f in families for d in f.distances}
+    for a, b in references.exemplar_halves(setup.exemplar, gen, repeats):
+        for fam in families:
+            for k, v in fam.compare(fam.features(a[None], False), fam.features(b[None], False)).items():
+                out[k].append((v, a.size, b.size))
+    return out
+
+
+def _ceilings(families: list[Family], setup: Setup, ex_features: dict, key: tuple,
+              gen: np.random.Generator, repeats: int) -> dict[str, list[float | None]]:
+    """Each distance between the exemplar and structureless slices of the views' shape."""
+    shape, n = key
+    out: dict[str, list[float | None]] = {d.key: [] for f in families for d in f.distances}
+    lo, hi = setup.ex_range
+    for _ in range(repeats):
+        draws = {"shuffle": references.shuffled_stack(setup.exemplar, shape, n, gen),
+                 "noise": references.noise_stack(lo, hi, setup.integer_valued, shape, n, gen)}
+        for fam in families:
+            kinds = {d.ceiling for d in fam.distances}
+            got = {kind: fam.compare(ex_features[fam.name], fam.features(draws[kind], setup.periodic))
+                   for kind in kinds}
+            for d in fam.distances:
+                out[d.key].append(got[d.ceiling][d.key])
+    return out
+
+
+def _view_report(view: str, shape: tuple, stack: np.ndarray, max_slices: int | None, is_constrained: bool,
+                 families: list[Family], setup: Setup, ex_features: dict, floors: dict, ceilings: dict) -> dict:
+    axis = {"front": 0, "right": 2, "top": 1}[view]
+    out: dict[str, Any] = {
+        "constrained": is_constrained,
+        "label": f"{view} ({'constrained' if is_constrained else 'unconstrained'})",
+        "slice_axis": "zyx"[axis],
+        "slice_indices": slice_indices(shape[axis], max_slices),
+        "slice_shape": list(stack.shape[1:]),
+        "stats": first_order_stats(setup.grey(stack)),
+        "distances": {},
+    }
+    for fam in families:
+        fb = fam.features(stack, setup.periodic)
+        values = fam.compare(ex_features[fam.name], fb)
+        for d in fam.distances:
+            floor = references.floor_reference(floors[d.key], setup.exemplar.size, stack.size, d.power)
+            ceiling = references.spread(ceilings[d.key])
+            out["distances"][d.key] = {
+                "label": d.label, "units": d.units, "value": values[d.key],
+                "floor": floor, "ceiling": None if ceiling is None else {**ceiling, "kind": d.ceiling},
+                **references.readable(values[d.key], floor, ceiling),
+            }
+        out[fam.name] = fam.details(ex_features[fam.name], fb, view)
+    return out
+
+
+def _summary(report_views: dict) -> list[dict]:
+    rows = []
+    for view, rep in report_views.items():
+        for key, d in rep["distances"].items():
+            rows.append({"view": view, "constrained": rep["constrained"], "metric": key, "units": d["units"],
+                         "value": d["value"],
+                         "floor": None if d["floor"] is None else d["floor"]["mean"],
+                         "floor_std": None if d["floor"] is None else d["floor"]["std"],
+                         "ceiling": None if d["ceiling"] is None else d["ceiling"]["mean"],
+                         "ceiling_std": None if d["ceiling"] is None else d["ceiling"]["std"],
+                         "informative": d["informative"], "score": d["score"]})
+    return rows
+
+
+def _settings(setup: Setup, views: tuple, constrained: tuple, max_slices: int | None, rng: Any,
+              repeats: int, skipped: dict) -> dict:
+    """Every choice the numbers depend on, so that a report explains itself."""
+    return {
+        "views": list(views), "constrained": list(constrained), "levels": setup.levels,
+        "max_slices": max_slices, "seed": rng if isinstance(rng, (int, np.integer)) else None,
+        "reference_repeats": repeats, "periodic_volume": setup.periodic, "skipped": skipped,
+        "statistics": "population moments (ddof=0); mad = mean absolute deviation about the mean; "
+                      "skewness = m3/m2^1.5; kurtosis = excess kurtosis m4/m2^2 - 3",
+        "histogram": {"bins": len(setup.hist_edges) - 1, "range": [setup.hist_edges[0], setup.hist_edges[-1]],
+                      "pseudo_count": PSEUDO_COUNT,
+                      "divergence": "sum (P-Q) ln(P/Q) = KL(P||Q) + KL(Q||P), nats"},
+        "autocorrelation": {"lags": setup.max_lag,
+                            "clip": f"{autocorr.DEFAULT_LAGS}, clipped to half the side of the smallest "
+                                    "exemplar part used by the floor and to half the slices' side",
+                            "distance": "RMS difference over lags of the exemplar's map and the mean "
+                                        "of the slices' maps"},
+        "orientation": {"gradient": "Sobel", "window": "Gaussian sigma 1, 7x7",
+                        "bins": orientation.ORIENTATION_BINS, "weights": "coherence",
+                        "pseudo_count": PSEUDO_COUNT, "border_dropped": orientation.BORDER},
+        "fringes": {"level": setup.fringe_level, "smoothing_sigma": fringes.SMOOTH_SIGMA,
+                    "min_tip_distance": fringes.MIN_EXTENT, "max_extent": setup.fringe_cap,
+                    "edge_correction": "Miles-Lantuejoul weights (non-periodic); periodic slices wrap",
+                    "distance": "Wasserstein-1 between weighted number distributions"},
+        "patches": {"size": patches.PATCH_SIZE, "scales": list(setup.patch_scales),
+                    "projections": patches.N_PROJECTIONS, "quantiles": patches.N_QUANTILES,
+                    "max_patches": patches.MAX_PATCHES, "standardised_by": "exemplar mean and std"},
+        "phases": {"values": setup.phase_values, "max_phases": phases.MAX_PHASES,
+                   "max_lag": setup.max_lag},
+        "references": {"floor": "distance between two random near-halves of the exemplar (cut at 40-60%), "
+                                "times (1/N_exemplar + 1/N_slices)^p / (1/N_half1 + 1/N_half2)^p with p = 1 "
+                                "for KL divergences and 1/2 for the other distances (raw values in "
+                                "floor.halves)",
+                       "ceiling_shuffle": f"exemplar vs {CEILING_SLICES} slices of its shuffled pixels",
+                       "ceiling_noise": "exemplar vs uniform noise over its range (distances shuffling "
+                                        "cannot change)",
+                       "informative": f"ceiling mean - floor mean > {references.SEPARATION} x "
+                                      "sqrt(floor std^2 + ceiling std^2)",
+                       "score": "(value - floor mean) / (ceiling mean - floor mean)"},
+    }

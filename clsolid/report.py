@@ -1,0 +1,483 @@
+"""``clsolid evaluate``: compare a volume with its exemplar, print a table, write JSON and a PNG.
+
+The numbers come from :func:`clsolid.metrics.evaluate`; this module reads the files, formats
+the table, and draws the report and convergence-track figures. Plotting needs matplotlib,
+an optional extra (``pip install "clsolid[report]"``); everything else works without it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import pathlib
+import sys
+from typing import Any
+
+import numpy as np
+
+from .errors import ClsolidError, InputError
+from .metrics import VIEWS, evaluate
+
+#: Exit codes of :func:`main_evaluate`.
+EXIT_OK, EXIT_INPUT, EXIT_NO_MATPLOTLIB = 0, 2, 3
+INSTALL_HINT = 'install it with pip install "clsolid[report]" or pip install matplotlib'
+_IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".gif")
+_TIFF_SUFFIXES = (".tif", ".tiff")
+
+
+class PlottingUnavailable(ClsolidError, ImportError):
+    """matplotlib, needed to draw a figure, is not installed."""
+
+
+# ----------------------------------------------------------------------------- arguments
+
+
+def add_evaluate_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the ``evaluate`` sub-command's arguments to ``parser``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-parser the CLI created for ``evaluate``.
+    """
+    parser.add_argument("exemplar", nargs="?", metavar="EXEMPLAR",
+                        help="2D exemplar image (.npy, .tif/.tiff, .png)")
+    parser.add_argument("volume", nargs="?", metavar="VOLUME", help="3D (Z, Y, X) volume (.npy, .tif/.tiff)")
+    parser.add_argument("--views", nargs="+", choices=VIEWS, default=list(VIEWS),
+                        help="views to report (default: all three)")
+    parser.add_argument("--constrained", nargs="*", choices=VIEWS, default=["front", "right"],
+                        help="views the synthesis constrained, for labelling (default: front right)")
+    parser.add_argument("--levels", type=int, default=None,
+                        help="quantise both into this many grey levels before the histogram "
+                             "statistics (default: use the grey levels as they are)")
+    parser.add_argument("-o", "--output", metavar="REPORT.json", help="write the full report as JSON")
+    parser.add_argument("--plot", metavar="REPORT.png", help="draw the report as a PNG (needs matplotlib)")
+    parser.add_argument("--track", metavar="TRACK.json",
+                        help="a convergence track to summarise (and plot with --plot)")
+    parser.add_argument("--max-slices", type=int, default=16,
+                        help="slices per view, evenly spaced (default 16; 0 = all)")
+    parser.add_argument("--repeats", type=int, default=5,
+                        help="random halves and shuffles per reference (default 5; 0 = none)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the references (default 0)")
+    parser.add_argument("--non-periodic", action="store_true",
+                        help="the volume does not wrap around (default: it does)")
+
+
+def main_evaluate(args: argparse.Namespace) -> int:
+    """Run ``clsolid evaluate`` with parsed arguments.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        As produced by a parser set up with :func:`add_evaluate_arguments`.
+
+    Returns
+    -------
+    int
+        0 on success, 2 for a usage or input error (message on stderr), 3 when ``--plot``
+        is asked for and matplotlib is missing.
+    """
+    try:
+        if args.plot:
+            _require_matplotlib()
+        if args.exemplar is not None or args.volume is not None or args.track is None:
+            _run_evaluation(args)
+        if args.track is not None:
+            _run_track(args)
+    except PlottingUnavailable as err:
+        print(f"clsolid evaluate: {err}", file=sys.stderr)
+        return EXIT_NO_MATPLOTLIB
+    except (InputError, OSError) as err:
+        print(f"clsolid evaluate: error: {err}", file=sys.stderr)
+        return EXIT_INPUT
+    return EXIT_OK
+
+
+def _run_evaluation(args: argparse.Namespace) -> None:
+    if args.exemplar is None or args.volume is None:
+        raise InputError("EXEMPLAR and VOLUME are both required (or give only --track FILE.json)")
+    if args.max_slices is not None and args.max_slices < 0:
+        raise InputError(f"--max-slices={args.max_slices} must be >= 0 (0 = all slices)")
+    exemplar = load_exemplar(args.exemplar)
+    volume = load_volume(args.volume)
+    report = evaluate(exemplar, volume, views=args.views, constrained=args.constrained or (),
+                      levels=args.levels, max_slices=args.max_slices or None, rng=args.seed,
+                      reference_repeats=args.repeats, periodic=not args.non_periodic)
+    report["files"] = {"exemplar": str(args.exemplar), "volume": str(args.volume)}
+    print(format_table(report))
+    if args.output:
+        with open(args.output, "w", encoding="utf-8") as fh:
+            json.dump(report, fh, indent=1, allow_nan=False)
+        print(f"report written to {args.output}")
+    if args.plot:
+        plot_report(report, args.plot)
+        print(f"plot written to {args.plot}")
+
+
+def _run_track(args: argparse.Namespace) -> None:
+    track = load_track(args.track)
+    print(format_track(track))
+    if args.plot:
+        path = pathlib.Path(args.plot)
+        if args.exemplar is not None:  # the report took --plot: the track goes next to it
+            path = path.with_name(f"{path.stem}_track{path.suffix or '.png'}")
+        plot_track(track, path)
+        print(f"track plot written to {path}")
+
+
+# ----------------------------------------------------------------------------- reading
+
+
+def _read_array(path: Any, param: str) -> np.ndarray:
+    p = pathlib.Path(path)
+    suffix = p.suffix.lower()
+    if not p.is_file():
+        raise InputError(f"{param}={str(path)!r} is not a file")
+    try:
+        if suffix == ".npy":
+            return np.load(p, allow_pickle=False)
+        if suffix in _TIFF_SUFFIXES:
+            import tifffile
+
+            return tifffile.imread(p)
+        if suffix in _IMAGE_SUFFIXES:
+            import skimage.io
+
+            return skimage.io.imread(p)
+    except (ValueError, OSError) as err:
+        raise InputError(f"{param}={str(path)!r} could not be read: {err}") from None
+    raise InputError(f"{param}={str(path)!r} has suffix {suffix!r}; use .npy, .tif, .tiff or .png")
+
+
+def load_exemplar(path: Any) -> np.ndarray:
+    """Read a 2D grey exemplar from .npy, .tif/.tiff or .png (grey, or colour with equal channels).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+
+    Returns
+    -------
+    numpy.ndarray
+        The 2D image, dtype as stored.
+    """
+    arr = _read_array(path, "EXEMPLAR")
+    if arr.ndim == 3 and arr.shape[-1] in (3, 4):
+        rgb = arr[..., :3]
+        if not (np.array_equal(rgb[..., 0], rgb[..., 1]) and np.array_equal(rgb[..., 0], rgb[..., 2])):
+            raise InputError(f"EXEMPLAR={str(path)!r} is a colour image; convert it to grey first")
+        arr = rgb[..., 0]
+    arr = _squeeze(arr)
+    if arr.ndim != 2:
+        raise InputError(f"EXEMPLAR={str(path)!r} holds an array of shape {arr.shape}; expected a 2D image")
+    return arr
+
+
+def load_volume(path: Any) -> np.ndarray:
+    """Read a 3D ``(Z, Y, X)`` volume from .npy or .tif/.tiff (singleton axes are dropped).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+
+    Returns
+    -------
+    numpy.ndarray
+        The 3D volume, dtype as stored.
+    """
+    arr = _squeeze(_read_array(path, "VOLUME"))
+    if arr.ndim != 3:
+        raise InputError(f"VOLUME={str(path)!r} holds an array of shape {arr.shape}; expected (Z, Y, X)")
+    return arr
+
+
+def _squeeze(arr: np.ndarray) -> np.ndarray:
+    """Drop singleton axes, but keep a volume or image with a side of one as it is."""
+    return arr.squeeze() if arr.ndim > 3 or (arr.ndim == 3 and 1 in arr.shape[:1]) else arr
+
+
+# ----------------------------------------------------------------------------- table
+
+
+def _fmt(x: Any, width: int = 0) -> str:
+    if x is None:
+        return "-"
+    if isinstance(x, float) and (x == 0 or 1e-3 <= abs(x) < 1e4):
+        return f"{x:.3g}" if abs(x) < 10 else f"{x:.1f}"
+    return f"{x:.2e}" if isinstance(x, float) else str(x)
+
+
+def _ref(ref: dict | None) -> str:
+    if ref is None:
+        return "-"
+    return f"{_fmt(ref['mean'])}±{_fmt(ref['std'])}"
+
+
+def _cell(d: dict) -> str:
+    if d["value"] is None:
+        return "n/m"
+    tag = "n/i" if d["informative"] is False else ("?" if d["score"] is None else f"{d['score']:+.2f}")
+    return f"{_fmt(d['value'])} [{tag}]"
+
+
+def format_table(report: dict) -> str:
+    """The short text table of a report: one row per distance, one column per view.
+
+    Parameters
+    ----------
+    report : dict
+        As returned by :func:`clsolid.metrics.evaluate`.
+
+    Returns
+    -------
+    str
+        Table, legend included.
+    """
+    views = report["views"]
+    names = list(views)
+    first = views[names[0]]
+    header = ["metric", "units", "floor", "ceiling"] + [
+        f"{v}{'*' if views[v]['constrained'] else ''}" for v in names]
+    rows = [header]
+    differ = False
+    for key, d in first["distances"].items():
+        for v in names[1:]:
+            other = views[v]["distances"][key]
+            differ |= (_ref(other["floor"]), _ref(other["ceiling"])) != (_ref(d["floor"]), _ref(d["ceiling"]))
+        rows.append([key, d["units"], _ref(d["floor"]), _ref(d["ceiling"])]
+                    + [_cell(views[v]["distances"][key]) for v in names])
+    widths = [max(len(r[i]) for r in rows) for i in range(len(header))]
+    lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    s = report["settings"]
+    ex, vol = report["exemplar"]["shape"], report["volume"]["shape"]
+    head = (f"exemplar {ex[0]}x{ex[1]}, volume {vol[0]}x{vol[1]}x{vol[2]} (Z,Y,X); "
+            f"{s['max_slices'] or 'all'} slices per view; {s['reference_repeats']} reference repeats")
+    legend = ["cells: value [score]; score = (value - floor) / (ceiling - floor): ~0 as good as the "
+              "exemplar itself, ~1 no more structure than shuffled pixels (noise for histograms)",
+              "floor/ceiling: mean±std over random exemplar halves / shuffles; * constrained view; "
+              "n/i: uninformative for this exemplar; n/m: not measurable; ?: no floor or ceiling"]
+    if differ:
+        legend.append(f"floor and ceiling shown for the {names[0]} view; the other views' are in the JSON")
+    for name, why in s.get("skipped", {}).items():
+        legend.append(f"skipped {name}: {why}")
+    return "\n".join([head, *lines, *legend, "", _stats_table(report)])
+
+
+def _stats_table(report: dict) -> str:
+    """First-order statistics of the exemplar and of each view's slices, side by side."""
+    views = report["views"]
+    cols = [("exemplar", report["exemplar"]["stats"])] + [
+        (f"{v}{'*' if rep['constrained'] else ''}", rep["stats"]) for v, rep in views.items()]
+    rows = [["statistic"] + [c for c, _ in cols]]
+    for key in ("mean", "mad", "std", "variance", "skewness", "kurtosis"):
+        rows.append([key if key != "kurtosis" else "kurtosis (excess)"] + [_fmt(st[key]) for _, st in cols])
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    return "\n".join("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows)
+
+
+# ----------------------------------------------------------------------------- track
+
+
+def load_track(path: Any) -> dict:
+    """Read and validate a convergence track JSON file (see :func:`validate_track`)."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            track = json.load(fh)
+    except json.JSONDecodeError as err:
+        raise InputError(f"--track={str(path)!r} is not valid JSON: {err}") from None
+    validate_track(track)
+    return track
+
+
+def validate_track(track: Any) -> list[dict]:
+    """Check ``{"records": [{"scale": int, "sweep": int, "indicators": {name: number}}, ...]}``.
+
+    Parameters
+    ----------
+    track : dict
+        The parsed JSON. Indicator values may be numbers or None (null).
+
+    Returns
+    -------
+    list of dict
+        The records.
+    """
+    if not isinstance(track, dict) or not isinstance(track.get("records"), list):
+        raise InputError("track must be a JSON object with a 'records' list")
+    for i, rec in enumerate(track["records"]):
+        if not isinstance(rec, dict):
+            raise InputError(f"track records[{i}] must be an object, got {rec!r}")
+        for key in ("scale", "sweep"):
+            if isinstance(rec.get(key), bool) or not isinstance(rec.get(key), int):
+                raise InputError(f"track records[{i}].{key} must be an integer, got {rec.get(key)!r}")
+        ind = rec.get("indicators")
+        if not isinstance(ind, dict):
+            raise InputError(f"track records[{i}].indicators must be an object, got {ind!r}")
+        for name, value in ind.items():
+            if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))):
+                raise InputError(f"track records[{i}].indicators[{name!r}] must be a number, got {value!r}")
+    return track["records"]
+
+
+def _track_series(records: list[dict]) -> dict[str, dict[int, tuple[list[int], list[float]]]]:
+    """indicator -> scale -> (sweeps, values), finite values only, in record order."""
+    out: dict[str, dict[int, tuple[list[int], list[float]]]] = {}
+    for rec in records:
+        for name, value in rec["indicators"].items():
+            if value is None or not math.isfinite(value):
+                continue
+            sweeps, values = out.setdefault(name, {}).setdefault(rec["scale"], ([], []))
+            sweeps.append(rec["sweep"])
+            values.append(float(value))
+    return out
+
+
+def format_track(track: dict) -> str:
+    """One line per indicator and scale: first and last value and the number of sweeps."""
+    series = _track_series(validate_track(track))
+    lines = [f"track: {len(track['records'])} records"]
+    for name, scales in series.items():
+        for scale, (sweeps, values) in sorted(scales.items()):
+            lines.append(f"  {name} scale {scale}: {_fmt(values[0])} -> {_fmt(values[-1])} "
+                         f"over {len(sweeps)} sweeps")
+    return "\n".join(lines)
+
+
+# ----------------------------------------------------------------------------- plotting
+
+
+def _require_matplotlib() -> tuple[Any, Any]:
+    """The Figure class and Agg canvas; no pyplot, so no global state or GUI backend."""
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise PlottingUnavailable(f"plotting needs matplotlib, which is not installed; {INSTALL_HINT}") from None
+    return Figure, FigureCanvasAgg
+
+
+def plot_track(track: dict, path: Any) -> None:
+    """Plot convergence indicators: one panel per indicator, one curve per scale against sweeps.
+
+    Parameters
+    ----------
+    track : dict
+        ``{"records": [{"scale": int, "sweep": int, "indicators": {name: float, ...}}, ...]}``.
+    path : str or path-like
+        The PNG to write.
+    """
+    series = _track_series(validate_track(track))
+    Figure, Canvas = _require_matplotlib()
+    n = max(len(series), 1)
+    cols = min(n, 3)
+    rows = -(-n // cols)
+    fig = Figure(figsize=(4.2 * cols, 3.2 * rows), layout="constrained")
+    Canvas(fig)
+    if not series:
+        fig.text(0.5, 0.5, "no indicator values in this track", ha="center")
+    for k, (name, scales) in enumerate(series.items()):
+        ax = fig.add_subplot(rows, cols, k + 1)
+        for scale, (sweeps, values) in sorted(scales.items()):
+            ax.plot(sweeps, values, marker="o", ms=3, label=f"scale {scale}")
+        ax.set_title(name)
+        ax.set_xlabel("sweep")
+        ax.xaxis.get_major_locator().set_params(integer=True)
+        ax.legend(fontsize="small")
+    fig.savefig(path, dpi=100)
+
+
+def plot_report(report: dict, path: Any) -> None:
+    """Draw a report: per view, histograms, orientation histograms, autocorrelation maps, fringes.
+
+    Parameters
+    ----------
+    report : dict
+        As returned by :func:`clsolid.metrics.evaluate`.
+    path : str or path-like
+        The PNG to write.
+    """
+    Figure, Canvas = _require_matplotlib()
+    panels = [_hist_panel, _orientation_panel, _acf_panel("exemplar"), _acf_panel("volume"), _fringe_panel]
+    if any(v.get("phases") for v in report["views"].values()):
+        panels.append(_s2_panel)
+    views = report["views"]
+    fig = Figure(figsize=(3.3 * len(panels), 2.9 * len(views)), layout="constrained")
+    Canvas(fig)
+    for r, (name, view) in enumerate(views.items()):
+        for c, panel in enumerate(panels):
+            ax = fig.add_subplot(len(views), len(panels), r * len(panels) + c + 1)
+            panel(ax, view)
+            if c == 0:
+                ax.set_ylabel(view["label"], fontweight="bold")
+    fig.suptitle("clsolid evaluate: exemplar (black) vs volume slices (red)")
+    fig.savefig(path, dpi=90)
+
+
+def _score_title(view: dict, key: str, what: str) -> str:
+    d = view["distances"].get(key)
+    if d is None:
+        return what
+    return f"{what}\n{key}: {_cell(d)}"
+
+
+def _hist_panel(ax: Any, view: dict) -> None:
+    h = view["histogram"]
+    ax.step(h["bin_centres"], h["exemplar"], where="mid", color="k", label="exemplar")
+    ax.step(h["bin_centres"], h["volume"], where="mid", color="r", label="volume")
+    ax.set_title(_score_title(view, "histogram_kl", "grey levels"), fontsize="small")
+    ax.legend(fontsize="x-small")
+
+
+def _orientation_panel(ax: Any, view: dict) -> None:
+    o = view.get("orientation")
+    if o is None:
+        ax.text(0.5, 0.5, "orientation skipped", ha="center", transform=ax.transAxes)
+        return
+    ax.plot(o["bin_centres_deg"], o["exemplar"]["histogram"], color="k")
+    ax.plot(o["bin_centres_deg"], o["volume"]["histogram"], color="r")
+    ax.set_xlabel("gradient angle (deg)")
+    ax.set_title(_score_title(view, "orientation_kl", "orientation"), fontsize="small")
+
+
+def _acf_panel(side: str):
+    def panel(ax: Any, view: dict) -> None:
+        a = view["autocorrelation"]
+        ly, lx = a["lags"]
+        ax.imshow(np.array(a[side]), extent=(-lx - 0.5, lx + 0.5, ly + 0.5, -ly - 0.5), vmin=-1, vmax=1,
+                  cmap="RdBu_r")
+        title = f"autocorrelation, {side}"
+        ax.set_title(_score_title(view, "autocorrelation_l2", title) if side == "volume" else title,
+                     fontsize="small")
+    return panel
+
+
+def _fringe_panel(ax: Any, view: dict) -> None:
+    f = view.get("fringes")
+    if f is None or f["exemplar"]["length_hist"] is None or f["volume"]["length_hist"] is None:
+        ax.text(0.5, 0.5, "no fringe distribution", ha="center", transform=ax.transAxes)
+        return
+    edges = np.array(f["length_edges"])
+    centres = 0.5 * (edges[1:] + edges[:-1])
+    ax.step(centres, f["exemplar"]["length_hist"], where="mid", color="k")
+    ax.step(centres, f["volume"]["length_hist"], where="mid", color="r")
+    ax.set_xlabel("fringe length (px)")
+    ax.set_title(_score_title(view, "fringe_length_w1", "fringe lengths"), fontsize="small")
+
+
+def _s2_panel(ax: Any, view: dict) -> None:
+    p = view.get("phases")
+    if not p:
+        return
+    for curve in p["curves"]:
+        if curve["phase"] != len(p["phase_values"]) - 1:
+            continue
+        style = "-" if curve["axis"] == 1 else "--"
+        ax.plot(curve["s2"]["exemplar"], style, color="k", label=f"along {curve['volume_axis']}")
+        ax.plot(curve["s2"]["volume"], style, color="r")
+    ax.set_xlabel("lag (px)")
+    ax.legend(fontsize="x-small")
+    ax.set_title(_score_title(view, "s2_l2", f"S2 of phase {p['phase_values'][-1]}"), fontsize="small")

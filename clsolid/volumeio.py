@@ -1,0 +1,507 @@
+"""Reading and writing volumes, plus a one-image preview of a synthesis result.
+
+Volumes are ``(Z, Y, X)`` arrays. TIFF output is an ImageJ hyperstack so that Fiji
+opens it as a z-stack with the right voxel size; ``.npy`` keeps the bare array.
+Label volumes (integer grey-level indices) are narrowed to ``uint8``/``uint16``
+because those, with ``float32``, are the only sample types ImageJ understands.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import pathlib
+from numbers import Real
+from typing import Any, Union
+
+import numpy as np
+import tifffile
+from PIL import Image
+
+from .errors import InputError
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+#: Extensions :func:`save_volume` can write.
+VOLUME_WRITE_SUFFIXES = (".tif", ".tiff", ".npy")
+#: Extensions :func:`load_volume` can read.
+VOLUME_READ_SUFFIXES = (".tif", ".tiff", ".npy", ".png")
+#: Smallest height, in pixels, of the panels of :func:`save_preview`.
+PREVIEW_MIN_HEIGHT = 128
+#: Width, in pixels, of the white gap between preview panels.
+PREVIEW_GAP = 4
+
+# ImageJ "Properties" keys under which we store what the ImageJ header cannot say.
+_PROP_AXES = "clsolid.axes"
+_PROP_METADATA = "clsolid.metadata"
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _as_path(path: Any, param: str) -> pathlib.Path:
+    """Turn ``path`` into a :class:`pathlib.Path`, rejecting non path-like values."""
+    if isinstance(path, (str, os.PathLike)):
+        return pathlib.Path(path)
+    raise InputError(
+        f"{param} must be a file path (str or pathlib.Path), got {type(path).__name__} {path!r}; "
+        "pass the file name as a string"
+    )
+
+
+def _suffix(path: pathlib.Path, param: str, allowed: tuple[str, ...]) -> str:
+    """Lower-case extension of ``path``, which must be one of ``allowed``."""
+    suffix = path.suffix.lower()
+    if suffix not in allowed:
+        raise InputError(
+            f"{param} {str(path)!r} has unsupported extension {path.suffix or '(none)'!r}; "
+            f"use one of {', '.join(allowed)} (any case)"
+        )
+    return suffix
+
+
+def _read_png(path: pathlib.Path, param: str) -> np.ndarray:
+    """Read a PNG keeping its bit depth; colour images keep their channel axis last."""
+    try:
+        with Image.open(path) as img:
+            img.load()
+            if img.mode == "1":
+                # A bilevel image would come back as bool, which is not a grey scale.
+                img = img.convert("L")
+            elif img.mode == "P":
+                # Palette indices are not grey values: expand, then collapse a grey palette.
+                img = img.convert("RGBA" if "transparency" in img.info else "RGB")
+            data = np.asarray(img)
+    except (OSError, ValueError) as exc:
+        raise InputError(
+            f"{param} {str(path)!r} could not be read as a PNG image ({exc}); "
+            "check that the file is a valid PNG"
+        ) from exc
+    if data.ndim == 3 and data.shape[-1] == 3 and _channels_equal(data):
+        data = data[..., 0]
+    return np.array(data)
+
+
+def _channels_equal(rgb: np.ndarray) -> bool:
+    """Whether the three colour channels are identical (a grey palette image)."""
+    return bool(np.array_equal(rgb[..., 0], rgb[..., 1]) and np.array_equal(rgb[..., 0], rgb[..., 2]))
+
+
+def _rational(value: Any) -> float | None:
+    """A TIFF RATIONAL tag value as float, or ``None`` if it is missing or zero."""
+    try:
+        num, den = value
+        ratio = float(num) / float(den)
+    except (TypeError, ValueError, ZeroDivisionError):
+        return None
+    return ratio if ratio > 0 and math.isfinite(ratio) else None
+
+
+def _tiff_info(tif: tifffile.TiffFile) -> tuple[dict, dict]:
+    """Voxel size, unit and our metadata from an ImageJ TIFF; also the raw ImageJ properties."""
+    info: dict[str, Any] = {"voxel_size": None, "unit": None, "metadata": None}
+    ij = tif.imagej_metadata or {}
+    props = ij.get("Properties") or {}
+    if not isinstance(props, dict):
+        props = {}
+    # ImageJ writes 'unit' (and 'spacing' for stacks) only for a calibrated image.
+    if "spacing" in ij or "unit" in ij:
+        tags = tif.pages.first.tags
+        xres = tags.get("XResolution")
+        yres = tags.get("YResolution")
+        xppu = _rational(xres.value) if xres is not None else None
+        yppu = _rational(yres.value) if yres is not None else None
+        x = 1.0 / xppu if xppu else 1.0
+        y = 1.0 / yppu if yppu else x
+        # ImageJ's default voxel depth is 1 when no spacing is recorded.
+        z = float(ij.get("spacing", 1.0))
+        info["voxel_size"] = (z, y, x)
+        info["unit"] = str(ij.get("unit", "pixel"))
+    if _PROP_METADATA in props:
+        try:
+            info["metadata"] = json.loads(props[_PROP_METADATA])
+        except (TypeError, ValueError):
+            info["metadata"] = None
+    return info, props
+
+
+def _read_tiff(path: pathlib.Path, param: str) -> tuple[np.ndarray, dict]:
+    """Read a TIFF as stored (a stack as ``(Z, Y, X)``) with its calibration."""
+    try:
+        with tifffile.TiffFile(path) as tif:
+            data = tif.asarray()
+            info, props = _tiff_info(tif)
+    except (OSError, ValueError, tifffile.TiffFileError) as exc:
+        raise InputError(
+            f"{param} {str(path)!r} could not be read as a TIFF file ({exc}); "
+            "check that the file is a valid TIFF"
+        ) from exc
+    # tifffile squeezes a one-slice stack to 2D; our marker says it was a volume.
+    if data.ndim == 2 and props.get(_PROP_AXES) == "ZYX":
+        data = data[np.newaxis]
+    return data, info
+
+
+def _read_npy(path: pathlib.Path, param: str) -> np.ndarray:
+    """Read a ``.npy`` file without unpickling (object arrays are refused)."""
+    try:
+        data = np.load(path, allow_pickle=False)
+    except (OSError, ValueError, EOFError) as exc:
+        raise InputError(
+            f"{param} {str(path)!r} could not be read as a .npy array ({exc}); "
+            "save it with numpy.save from a numeric array"
+        ) from exc
+    if not isinstance(data, np.ndarray):  # np.load returns an NpzFile for .npz content
+        raise InputError(f"{param} {str(path)!r} is not a single .npy array; save it with numpy.save")
+    return data
+
+
+def _read_any(path: Any, param: str) -> tuple[np.ndarray, dict]:
+    """Read a supported file as stored, colour channels included, with its info dict."""
+    p = _as_path(path, param)
+    suffix = _suffix(p, param, VOLUME_READ_SUFFIXES)
+    if not p.exists():
+        raise InputError(f"{param} {str(p)!r} does not exist; check the file name and directory")
+    if not p.is_file():
+        raise InputError(f"{param} {str(p)!r} is not a regular file; pass the path of a file")
+    info: dict[str, Any] = {"voxel_size": None, "unit": None, "metadata": None}
+    if suffix in (".tif", ".tiff"):
+        return _read_tiff(p, param)
+    if suffix == ".npy":
+        return _read_npy(p, param), info
+    return _read_png(p, param), info
+
+
+def _check_voxel_size(voxel_size: Any) -> tuple[float, float, float] | None:
+    """Validate ``voxel_size`` (scalar = isotropic) and return it as ``(z, y, x)``."""
+    if voxel_size is None:
+        return None
+    values = (voxel_size,) * 3 if isinstance(voxel_size, Real) and not isinstance(voxel_size, bool) else voxel_size
+    try:
+        values = tuple(values)
+    except TypeError:
+        values = ()
+    ok = len(values) == 3 and all(isinstance(v, Real) and not isinstance(v, bool) for v in values)
+    if not ok or not all(math.isfinite(float(v)) and float(v) > 0 for v in values):
+        raise InputError(
+            f"voxel_size must be a positive finite number or a (z, y, x) tuple of three, got {voxel_size!r}; "
+            "pass e.g. voxel_size=0.5 or voxel_size=(2.0, 0.5, 0.5)"
+        )
+    return tuple(float(v) for v in values)  # type: ignore[return-value]
+
+
+def _check_unit(unit: Any) -> str:
+    """The unit string must be short text that fits on one ImageJ header line."""
+    if not isinstance(unit, str) or not unit.strip() or any(c in unit for c in "\r\n="):
+        raise InputError(
+            f"unit must be a non-empty string without line breaks or '=', got {unit!r}; "
+            "pass e.g. unit='um' or unit='mm'"
+        )
+    return unit
+
+
+def _check_metadata(metadata: Any) -> str | None:
+    """Serialise ``metadata`` to JSON, which is how it is stored in the TIFF."""
+    if metadata is None:
+        return None
+    if not isinstance(metadata, dict):
+        raise InputError(f"metadata must be a dict or None, got {type(metadata).__name__}; pass a dict")
+    try:
+        return json.dumps(metadata, sort_keys=True, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        raise InputError(
+            f"metadata must be JSON-serialisable (str keys; str, number, bool, None, list, dict values), "
+            f"got {metadata!r} ({exc}); convert arrays with .tolist() and drop other objects"
+        ) from exc
+
+
+def _check_volume(volume: Any) -> np.ndarray:
+    """A non-empty, real-valued 3D ndarray."""
+    if not isinstance(volume, np.ndarray):
+        raise InputError(
+            f"volume must be a numpy array of shape (Z, Y, X), got {type(volume).__name__}; "
+            "pass np.asarray(volume)"
+        )
+    if volume.ndim != 3:
+        raise InputError(
+            f"volume must be 3D (Z, Y, X), got shape {volume.shape}; "
+            "for a single 2D slice pass volume[np.newaxis]"
+        )
+    if volume.size == 0:
+        raise InputError(f"volume is empty (shape {volume.shape}); every dimension must be at least 1")
+    if volume.dtype.kind not in "biuf":
+        raise InputError(
+            f"volume has unsupported dtype {volume.dtype}; use an integer, float or bool array"
+        )
+    return volume
+
+
+def _narrow_labels(volume: np.ndarray) -> np.ndarray | None:
+    """Integer/bool volume as ``uint8``/``uint16`` if its values fit, else ``None``."""
+    if volume.dtype == np.uint8 or volume.dtype == np.uint16:
+        return volume
+    if volume.dtype.kind == "b":
+        return volume.astype(np.uint8)
+    lo, hi = int(volume.min()), int(volume.max())
+    if lo >= 0 and hi < 256:
+        return volume.astype(np.uint8)
+    if lo >= 0 and hi < 65536:
+        return volume.astype(np.uint16)
+    return None
+
+
+def _tiff_ready(volume: np.ndarray) -> np.ndarray:
+    """Convert ``volume`` to an ImageJ sample type (uint8, uint16 or float32)."""
+    if volume.dtype.kind == "f":
+        return volume.astype(np.float32, copy=False)
+    narrowed = _narrow_labels(volume)
+    if narrowed is None:
+        raise InputError(
+            f"volume values span {int(volume.min())}..{int(volume.max())} (dtype {volume.dtype}), which does not "
+            "fit ImageJ's uint8/uint16 samples; rescale to 0..65535, convert to float32, or save as .npy"
+        )
+    return narrowed
+
+
+# --------------------------------------------------------------------------- public API
+
+
+def save_volume(
+    path: PathLike,
+    volume: np.ndarray,
+    *,
+    voxel_size: float | tuple[float, float, float] | None = None,
+    unit: str = "um",
+    metadata: dict | None = None,
+) -> pathlib.Path:
+    """Write a ``(Z, Y, X)`` volume to ``.tif``/``.tiff`` or ``.npy``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file. The extension (any case) picks the format. Parent
+        directories are created; an existing file is overwritten.
+    volume : numpy.ndarray
+        3D array ``(Z, Y, X)`` of integers, floats or bools.
+    voxel_size : float or tuple of 3 floats, optional
+        Physical voxel size ``(z, y, x)``; a scalar means isotropic. TIFF only.
+    unit : str, default "um"
+        Length unit of ``voxel_size``. TIFF only (written only with ``voxel_size``).
+    metadata : dict, optional
+        JSON-serialisable extra information, stored in the TIFF as the ImageJ
+        property ``clsolid.metadata`` and returned by :func:`load_volume`. TIFF only.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    InputError
+        Unsupported extension, bad ``volume``, ``voxel_size``, ``unit`` or
+        ``metadata``, or integer values that fit neither uint8 nor uint16 (TIFF).
+
+    Notes
+    -----
+    TIFF: an ImageJ hyperstack with axes ``ZYX``. ImageJ stores only uint8,
+    uint16 and float32 samples, so integer and bool volumes become ``uint8``
+    when their values are in 0..255, else ``uint16`` when in 0..65535 (else
+    an error); floats become ``float32``.
+
+    NPY: integer and bool volumes are narrowed the same way when they fit
+    (else kept as they are); floats keep their dtype. A ``.npy`` file holds
+    only the array, so ``voxel_size``, ``unit`` and ``metadata`` are validated
+    but not stored there; use TIFF to keep them.
+    """
+    p = _as_path(path, "path")
+    suffix = _suffix(p, "path", VOLUME_WRITE_SUFFIXES)
+    vol = _check_volume(volume)
+    spacing = _check_voxel_size(voxel_size)
+    unit = _check_unit(unit)
+    meta_json = _check_metadata(metadata)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    if suffix == ".npy":
+        narrowed = vol if vol.dtype.kind == "f" else _narrow_labels(vol)
+        # Through a file object: np.save on a name appends ".npy" unless it ends in lower-case ".npy".
+        with open(p, "wb") as fh:
+            np.save(fh, vol if narrowed is None else narrowed, allow_pickle=False)
+        return p
+    _write_imagej(p, _tiff_ready(vol), spacing, unit, meta_json)
+    return p
+
+
+def _write_imagej(
+    path: pathlib.Path,
+    volume: np.ndarray,
+    spacing: tuple[float, float, float] | None,
+    unit: str,
+    meta_json: str | None,
+) -> None:
+    """Write an ImageJ ZYX hyperstack with optional calibration and metadata."""
+    props = {_PROP_AXES: "ZYX"}
+    if meta_json is not None:
+        props[_PROP_METADATA] = meta_json
+    ij_meta: dict[str, Any] = {"axes": "ZYX", "Properties": props}
+    kwargs: dict[str, Any] = {}
+    if spacing is not None:
+        z, y, x = spacing
+        ij_meta.update(spacing=z, unit=unit)
+        # TIFF resolution is pixels per unit, the inverse of the pixel size.
+        kwargs["resolution"] = (1.0 / x, 1.0 / y)
+    tifffile.imwrite(path, np.ascontiguousarray(volume), imagej=True, metadata=ij_meta, **kwargs)
+
+
+def load_volume(path: PathLike) -> tuple[np.ndarray, dict]:
+    """Read a volume (or a single slice) from ``.tif``/``.tiff``/``.npy``/``.png``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        File to read; the extension (any case) picks the reader.
+
+    Returns
+    -------
+    array : numpy.ndarray
+        The data with its stored dtype: ``(Z, Y, X)`` for a stack, 2D for a
+        single image (a PNG is always one 2D slice). A one-slice volume
+        written by :func:`save_volume` reads back as ``(1, Y, X)``.
+    info : dict
+        ``'voxel_size'``: ``(z, y, x)`` floats when the TIFF carries ImageJ
+        calibration (z is 1.0, ImageJ's default, when no spacing is recorded),
+        else ``None``; ``'unit'``: the ImageJ unit string or ``None``;
+        ``'metadata'``: the dict given to :func:`save_volume` or ``None``.
+
+    Raises
+    ------
+    InputError
+        Missing file, unsupported extension, unreadable content or a colour PNG.
+    """
+    data, info = _read_any(path, "path")
+    if _as_path(path, "path").suffix.lower() == ".png" and data.ndim != 2:
+        raise InputError(
+            f"path {str(path)!r} is a colour PNG (shape {data.shape}); only grey PNG slices are supported, "
+            "convert it to grey first (e.g. skimage.color.rgb2gray)"
+        )
+    return data, info
+
+
+def _panels(exemplar: np.ndarray, volume: np.ndarray) -> list[np.ndarray]:
+    """Exemplar, then the (y, x), (y, z) and (z, x) mid-slices of the volume."""
+    zc, yc, xc = (n // 2 for n in volume.shape)
+    return [exemplar, volume[zc], volume[:, :, xc].T, volume[:, yc, :]]
+
+
+def _to_grey8(panels: list[np.ndarray], levels: int | None) -> list[np.ndarray]:
+    """Map every panel through one linear grey scale onto 0..255."""
+    if levels is not None:
+        lo, hi = 0.0, float(levels - 1)
+    else:
+        lo = min(float(p.min()) for p in panels)
+        hi = max(float(p.max()) for p in panels)
+    # Halving first keeps the span finite even for extreme float ranges.
+    half_span = hi / 2 - lo / 2
+    out = []
+    for p in panels:
+        if half_span > 0:
+            scaled = (p.astype(np.float64) / 2 - lo / 2) * (255.0 / half_span)
+        else:
+            scaled = np.zeros(p.shape)
+        out.append(np.clip(np.rint(scaled), 0, 255).astype(np.uint8))
+    return out
+
+
+def _common_height(heights: list[int]) -> int | None:
+    """Smallest multiple of every height that is at least the minimum, if not too tall."""
+    target = math.lcm(*heights)
+    target *= max(1, -(-PREVIEW_MIN_HEIGHT // target))
+    # Beyond twice the minimum or the tallest panel the image grows needlessly large; pad instead.
+    return target if target <= 2 * max(PREVIEW_MIN_HEIGHT, max(heights)) else None
+
+
+def _scale_panels(panels: list[np.ndarray]) -> list[np.ndarray]:
+    """Nearest-neighbour integer up-scaling of every panel to one height.
+
+    When the least common multiple of the heights is too large to serve as the
+    common height, each panel gets the largest integer factor that
+    fits and is padded at the bottom with white.
+    """
+    heights = [p.shape[0] for p in panels]
+    target = _common_height(heights)
+    exact = target is not None
+    if target is None:
+        target = max(PREVIEW_MIN_HEIGHT, max(heights))
+    scaled = []
+    for p in panels:
+        k = max(1, target // p.shape[0])
+        big = np.repeat(np.repeat(p, k, axis=0), k, axis=1)
+        if not exact and big.shape[0] < target:
+            pad = np.full((target - big.shape[0], big.shape[1]), 255, dtype=np.uint8)
+            big = np.vstack([big, pad])
+        scaled.append(big)
+    return scaled
+
+
+def _check_preview_inputs(exemplar: Any, volume: Any, levels: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Validate the arrays and ``levels`` of :func:`save_preview`."""
+    if not isinstance(exemplar, np.ndarray) or exemplar.ndim != 2 or exemplar.size == 0:
+        shape = getattr(exemplar, "shape", type(exemplar).__name__)
+        raise InputError(f"exemplar must be a non-empty 2D numpy array, got {shape}; pass the 2D exemplar")
+    vol = _check_volume(volume)
+    for name, arr in (("exemplar", exemplar), ("volume", vol)):
+        if arr.dtype.kind not in "biuf":
+            raise InputError(f"{name} has unsupported dtype {arr.dtype}; use an integer or float array")
+        if arr.dtype.kind == "f" and not np.isfinite(arr).all():
+            raise InputError(f"{name} contains NaN or infinite values; replace them before previewing")
+    if levels is not None and (not isinstance(levels, (int, np.integer)) or isinstance(levels, bool) or levels < 2):
+        raise InputError(f"levels must be None or an integer >= 2, got {levels!r}; pass the number of grey levels")
+    return exemplar, vol
+
+
+def save_preview(
+    path: PathLike, exemplar: np.ndarray, volume: np.ndarray, *, levels: int | None = None
+) -> pathlib.Path:
+    """Save the exemplar beside three orthogonal mid-slices of the volume as one grey PNG.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output ``.png`` file (any case); parent directories are created and an
+        existing file is overwritten.
+    exemplar : numpy.ndarray
+        2D exemplar (grey values or labels).
+    volume : numpy.ndarray
+        ``(Z, Y, X)`` volume.
+    levels : int, optional
+        When given, both arrays are read as labels in ``0..levels-1`` and mapped
+        so that label 0 is black and ``levels-1`` white. Otherwise one linear
+        mapping from the joint min..max of the four panels is used.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Notes
+    -----
+    Panels, left to right, separated by :data:`PREVIEW_GAP` white columns:
+    the exemplar; ``volume[Z//2]`` (rows y, columns x); ``volume[:, :, X//2].T``
+    (rows y, columns z); ``volume[:, Y//2, :]`` (rows z, columns x). Each panel
+    is enlarged by an integer nearest-neighbour factor to a common height of at
+    least :data:`PREVIEW_MIN_HEIGHT` pixels. When integer factors would need a
+    common height above twice that minimum and twice the tallest panel (e.g.
+    heights 64 and 100 need 1600), each
+    panel gets the largest factor that fits and is padded with white below.
+    """
+    p = _as_path(path, "path")
+    _suffix(p, "path", (".png",))
+    ex, vol = _check_preview_inputs(exemplar, volume, levels)
+    panels = _scale_panels(_to_grey8(_panels(ex, vol), levels))
+    gap = np.full((panels[0].shape[0], PREVIEW_GAP), 255, dtype=np.uint8)
+    pieces: list[np.ndarray] = []
+    for i, panel in enumerate(panels):
+        pieces.extend([gap, panel] if i else [panel])
+    p.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(np.ascontiguousarray(np.hstack(pieces))).save(p, format="PNG")
+    return p

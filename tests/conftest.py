@@ -1,0 +1,72 @@
+"""Shared fixtures: every OpenCL test runs on every visible device.
+
+Filter devices with ``PYOPENCL_TEST`` (a substring of the platform or device name).
+With no device: fail when ``$CI`` is set, skip locally with the reason.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+
+import numpy as np
+import pytest
+
+# Each test process gets its own PoCL kernel cache (parallel runs must not share one).
+os.environ.setdefault("POCL_CACHE_DIR", tempfile.mkdtemp(prefix="clsolid-pocl-"))
+
+
+def _device_specs() -> list[str]:
+    try:
+        from clsolid.device import list_devices
+
+        devices = list_devices()
+    except Exception as exc:  # noqa: BLE001 - reported below
+        return [f"!{exc}"]
+    wanted = os.environ.get("PYOPENCL_TEST", "").lower()
+    specs = [d["index"] for d in devices
+             if not wanted or wanted in d["name"].lower() or wanted in d["platform"].lower()]
+    return specs or ["!no OpenCL device matches PYOPENCL_TEST"]
+
+
+_DEVICES: dict = {}
+
+
+@pytest.fixture(params=_device_specs(), scope="session")
+def device(request):
+    """A :class:`clsolid.Device` for each visible OpenCL device (one per session)."""
+    spec = request.param
+    if spec.startswith("!"):
+        if os.environ.get("CI"):
+            pytest.fail(f"no OpenCL device on CI: {spec[1:]}")
+        pytest.skip(f"no OpenCL device: {spec[1:]}")
+    from clsolid.device import select_device
+
+    if spec not in _DEVICES:
+        _DEVICES[spec] = select_device(spec)
+    return _DEVICES[spec]
+
+
+@pytest.fixture(scope="session")
+def brick_labels():
+    """The default exemplar, quantised to 32 levels (64x64)."""
+    from clsolid.exemplar import builtin_exemplar, quantise
+
+    return quantise(builtin_exemplar("brick"), 32)
+
+
+@pytest.fixture(scope="session")
+def small_labels(brick_labels):
+    """A 24x24 corner of a 16-level brick, for runs the float64 reference can afford."""
+    from clsolid.exemplar import quantise
+
+    return quantise(brick_labels[:24, :24], 16)
+
+
+def random_state(model, seed=0, cold=0.3):
+    """A random volume and temperatures (some exactly 0) for a scale model."""
+    rng = np.random.default_rng(seed)
+    vol = rng.choice(model.labels, size=model.shape)
+    temp = rng.random(model.shape)
+    temp[temp < cold] = 0.0
+    return vol, temp

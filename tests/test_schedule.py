@@ -1,0 +1,61 @@
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from clsolid.ml_model import view_offsets
+from clsolid.schedule import colour_sets, period, set_order, split_by_colour
+
+
+def union_offsets(half, views):
+    return np.unique(np.concatenate([view_offsets(v, half) for v in views]), axis=0)
+
+
+def assert_conflict_free(shape, half, views):
+    colour, n = colour_sets(shape, half)
+    assert colour.min() >= 0 and colour.max() < n
+    ids = np.arange(np.prod(shape)).reshape(shape)
+    for off in union_offsets(half, views):
+        # neighbour of every voxel at this offset, wrap-around included
+        nb_colour = np.roll(colour, shift=tuple(-off), axis=(0, 1, 2))
+        nb_id = np.roll(ids, shift=tuple(-off), axis=(0, 1, 2))
+        clash = (nb_colour == colour) & (nb_id != ids)
+        assert not clash.any(), f"shape {shape}, half {half}, offset {off}: voxels of one set are neighbours"
+
+
+@settings(max_examples=60, deadline=None)
+@given(shape=st.tuples(*[st.integers(1, 23)] * 3), half=st.integers(1, 5), three=st.booleans())
+def test_sets_are_conflict_free_for_every_size(shape, half, three):
+    views = ("front", "right", "top") if three else ("front", "right")
+    assert_conflict_free(shape, half, views)
+
+
+def test_period_respects_the_wrap():
+    assert period((65, 65, 65), 4) == 5  # 25 sets for a 9x9 window when 5 divides the size
+    # on 64, period 5 would put 0 and 60 (wrapped distance 4) in one set; 6 and 7 fail too
+    assert period((64, 64, 64), 4) == 8
+    assert colour_sets((64, 64, 64), 4)[1] == 64
+    assert_conflict_free((64, 64, 64), 4, ("front", "right", "top"))
+
+
+def test_non_multiple_size_gets_a_longer_period():
+    # 66 = 13*5 + 1: positions 0 and 65 are neighbours on the torus and 65 = 13*5
+    assert period((66, 64, 64), 4) > 5
+    assert_conflict_free((66, 64, 63), 4, ("front", "right", "top"))
+
+
+def test_set_order_is_a_seeded_permutation():
+    a = set_order(25, 7, 0, 1)
+    assert sorted(a.tolist()) == list(range(25))
+    np.testing.assert_array_equal(a, set_order(25, 7, 0, 1))
+    assert not np.array_equal(a, set_order(25, 7, 0, 2))
+    assert not np.array_equal(a, set_order(25, 8, 0, 1))
+
+
+def test_split_by_colour_partitions_active_voxels():
+    colour, n = colour_sets((6, 7, 8), 2)
+    active = np.random.default_rng(0).random((6, 7, 8)) < 0.5
+    sets = split_by_colour(active, colour, n)
+    allv = np.concatenate(sets)
+    assert sorted(allv.tolist()) == np.flatnonzero(active).tolist()
+    for c, s in enumerate(sets):
+        assert (colour.ravel()[s] == c).all()

@@ -1,0 +1,342 @@
+"""Tests of clsolid.volumeio: volume save/load round trips and the preview image."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import tifffile
+from PIL import Image
+
+from clsolid.errors import InputError
+from clsolid.volumeio import PREVIEW_GAP, PREVIEW_MIN_HEIGHT, load_volume, save_preview, save_volume
+
+
+@pytest.fixture
+def labels() -> np.ndarray:
+    return np.random.default_rng(0).integers(0, 32, size=(6, 7, 8)).astype(np.int32)
+
+
+# --------------------------------------------------------------------------- TIFF
+
+
+def test_tif_round_trip_with_voxel_size(tmp_path, labels):
+    path = save_volume(tmp_path / "sub" / "dir" / "vol.tif", labels, voxel_size=(2.0, 0.5, 0.5))
+    assert path == tmp_path / "sub" / "dir" / "vol.tif" and path.is_file()
+    data, info = load_volume(path)
+    assert data.shape == (6, 7, 8) and data.dtype == np.uint8
+    np.testing.assert_array_equal(data, labels)
+    assert info["voxel_size"] == pytest.approx((2.0, 0.5, 0.5))
+    assert info["unit"] == "um"
+
+
+def test_tif_anisotropic_xy_and_unit(tmp_path, labels):
+    path = save_volume(tmp_path / "vol.TIFF", labels, voxel_size=(3.0, 0.25, 0.125), unit="mm")
+    _, info = load_volume(path)
+    assert info["voxel_size"] == pytest.approx((3.0, 0.25, 0.125))
+    assert info["unit"] == "mm"
+
+
+def test_tif_scalar_voxel_size_is_isotropic(tmp_path, labels):
+    _, info = load_volume(save_volume(tmp_path / "iso.tif", labels, voxel_size=0.75))
+    assert info["voxel_size"] == pytest.approx((0.75, 0.75, 0.75))
+
+
+def test_tif_without_voxel_size(tmp_path, labels):
+    _, info = load_volume(save_volume(tmp_path / "plain.tif", labels))
+    assert info["voxel_size"] is None and info["unit"] is None and info["metadata"] is None
+
+
+def test_tif_is_imagej_zyx_hyperstack(tmp_path, labels):
+    path = save_volume(tmp_path / "ij.tif", labels, voxel_size=(2.0, 0.5, 0.5))
+    with tifffile.TiffFile(path) as tif:
+        assert tif.is_imagej
+        assert tif.series[0].axes == "ZYX"
+        assert tif.imagej_metadata["slices"] == 6
+        assert tif.imagej_metadata["spacing"] == pytest.approx(2.0)
+
+
+def test_tif_metadata_round_trip(tmp_path, labels):
+    meta = {"seed": 7, "levels": 32, "exemplar": "brick", "weights": [0.5, 0.25]}
+    _, info = load_volume(save_volume(tmp_path / "m.tif", labels, metadata=meta))
+    assert info["metadata"] == meta
+
+
+def test_tif_single_slice_stays_3d(tmp_path, labels):
+    data, _ = load_volume(save_volume(tmp_path / "one.tif", labels[:1]))
+    assert data.shape == (1, 7, 8)
+    np.testing.assert_array_equal(data, labels[:1])
+
+
+@pytest.mark.parametrize(
+    "dtype, values, expected",
+    [
+        (np.int32, (0, 255), np.uint8),
+        (np.int64, (0, 256), np.uint16),
+        (np.uint32, (3, 65535), np.uint16),
+        (np.int8, (0, 100), np.uint8),
+        (np.uint8, (0, 255), np.uint8),
+        (np.uint16, (0, 10), np.uint16),  # kept: already an ImageJ type
+        (np.bool_, (False, True), np.uint8),
+        (np.float64, (-1.5, 2.25), np.float32),
+        (np.float16, (-1.5, 2.25), np.float32),
+        (np.float32, (-1.5, 2.25), np.float32),
+    ],
+)
+def test_tif_dtype_conversion(tmp_path, dtype, values, expected):
+    vol = np.zeros((2, 3, 4), dtype=dtype)
+    vol[0, 0, 0], vol[1, 2, 3] = values
+    data, _ = load_volume(save_volume(tmp_path / "d.tif", vol))
+    assert data.dtype == expected
+    np.testing.assert_array_equal(data, vol.astype(expected))
+
+
+@pytest.mark.parametrize("values", [(-1, 3), (0, 65536)])
+def test_tif_labels_out_of_range(tmp_path, values):
+    vol = np.zeros((2, 2, 2), dtype=np.int64)
+    vol[0, 0, 0], vol[1, 1, 1] = values
+    with pytest.raises(InputError, match="volume") as info:
+        save_volume(tmp_path / "bad.tif", vol)
+    assert str(values[0]) in str(info.value) and ".npy" in str(info.value)
+
+
+def test_overwrite_is_allowed(tmp_path, labels):
+    path = tmp_path / "o.tif"
+    save_volume(path, labels)
+    save_volume(path, labels + 1)
+    np.testing.assert_array_equal(load_volume(path)[0], labels + 1)
+
+
+# --------------------------------------------------------------------------- NPY / PNG
+
+
+def test_npy_round_trip_narrows_labels(tmp_path, labels):
+    path = save_volume(tmp_path / "v.npy", labels, voxel_size=1.0)
+    data, info = load_volume(path)
+    assert data.dtype == np.uint8
+    np.testing.assert_array_equal(data, labels)
+    assert info == {"voxel_size": None, "unit": None, "metadata": None}
+
+
+@pytest.mark.parametrize(
+    "dtype, values, expected",
+    [
+        (np.int32, (0, 1000), np.uint16),
+        (np.int64, (-5, 3), np.int64),  # does not fit: kept as is
+        (np.float64, (-1.5, 2.25), np.float64),
+        (np.float32, (-1.5, 2.25), np.float32),
+        (np.bool_, (False, True), np.uint8),
+    ],
+)
+def test_npy_dtype(tmp_path, dtype, values, expected):
+    vol = np.zeros((2, 3, 4), dtype=dtype)
+    vol[0, 0, 0], vol[1, 2, 3] = values
+    data, _ = load_volume(save_volume(tmp_path / "d.NPY", vol))
+    assert data.dtype == expected
+    np.testing.assert_array_equal(data, vol.astype(expected))
+
+
+def test_load_png_slice(tmp_path):
+    img = np.arange(200, dtype=np.uint8).reshape(10, 20)
+    path = tmp_path / "s.png"
+    Image.fromarray(img).save(path)
+    data, info = load_volume(path)
+    assert data.ndim == 2 and data.dtype == np.uint8
+    np.testing.assert_array_equal(data, img)
+    assert info["voxel_size"] is None
+
+
+def test_load_colour_png_is_error(tmp_path):
+    rgb = np.zeros((4, 5, 3), dtype=np.uint8)
+    rgb[..., 0] = 200
+    path = tmp_path / "c.png"
+    Image.fromarray(rgb).save(path)
+    with pytest.raises(InputError, match="path.*colour"):
+        load_volume(path)
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+@pytest.mark.parametrize("name", ["v.png", "v.raw", "v", "v.jpg"])
+def test_save_unsupported_extension(tmp_path, labels, name):
+    with pytest.raises(InputError, match="path") as info:
+        save_volume(tmp_path / name, labels)
+    assert ".tif" in str(info.value) and ".npy" in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "volume, needle",
+    [
+        (np.zeros((3, 4)), "(3, 4)"),
+        (np.zeros((2, 3, 4, 5)), "(2, 3, 4, 5)"),
+        (np.zeros((0, 3, 4)), "empty"),
+        (np.zeros((2, 2, 2), dtype=complex), "complex"),
+        ([[[1]]], "list"),
+    ],
+)
+def test_save_bad_volume(tmp_path, volume, needle):
+    with pytest.raises(InputError, match="volume") as info:
+        save_volume(tmp_path / "v.tif", volume)
+    assert needle in str(info.value)
+
+
+@pytest.mark.parametrize("bad", [0, -1.0, float("nan"), float("inf"), (1.0, 2.0), (1.0, 0.0, 1.0), "1", True])
+def test_save_bad_voxel_size(tmp_path, labels, bad):
+    with pytest.raises(InputError, match="voxel_size") as info:
+        save_volume(tmp_path / "v.tif", labels, voxel_size=bad)
+    assert repr(bad) in str(info.value)
+
+
+@pytest.mark.parametrize("bad", ["", "u\nm", "a=b", 3])
+def test_save_bad_unit(tmp_path, labels, bad):
+    with pytest.raises(InputError, match="unit"):
+        save_volume(tmp_path / "v.tif", labels, voxel_size=1.0, unit=bad)
+
+
+@pytest.mark.parametrize("bad", [[1, 2], {"a": object()}, {"a": float("nan")}])
+def test_save_bad_metadata(tmp_path, labels, bad):
+    with pytest.raises(InputError, match="metadata"):
+        save_volume(tmp_path / "v.tif", labels, metadata=bad)
+
+
+def test_nothing_written_on_bad_input(tmp_path, labels):
+    with pytest.raises(InputError):
+        save_volume(tmp_path / "new" / "v.tif", labels, voxel_size=-1)
+    assert not (tmp_path / "new").exists()
+
+
+@pytest.mark.parametrize(
+    "make_path, needle",
+    [
+        (lambda d: d / "missing.tif", "does not exist"),
+        (lambda d: d / "v.jpg", ".npy"),
+        (lambda d: 5, "int"),
+    ],
+)
+def test_load_bad_path(tmp_path, make_path, needle):
+    with pytest.raises(InputError, match="path") as info:
+        load_volume(make_path(tmp_path))
+    assert needle in str(info.value)
+
+
+@pytest.mark.parametrize("name", ["bad.tif", "bad.npy", "bad.png"])
+def test_load_corrupt_file(tmp_path, name):
+    path = tmp_path / name
+    path.write_bytes(b"garbage, not image data")
+    with pytest.raises(InputError, match="path"):
+        load_volume(path)
+
+
+def test_load_pickled_npy_is_error(tmp_path):
+    path = tmp_path / "obj.npy"
+    np.save(path, np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    with pytest.raises(InputError, match="path"):
+        load_volume(path)
+
+
+# --------------------------------------------------------------------------- preview
+
+
+def _read_png(path) -> np.ndarray:
+    with Image.open(path) as img:
+        return np.asarray(img).copy()
+
+
+def test_preview_layout_64(tmp_path):
+    rng = np.random.default_rng(3)
+    exemplar = rng.integers(0, 32, size=(64, 64))
+    volume = rng.integers(0, 32, size=(64, 64, 64))
+    path = save_preview(tmp_path / "prev" / "p.png", exemplar, volume, levels=32)
+    assert path.is_file()
+    img = _read_png(path)
+    assert img.ndim == 2 and img.dtype == np.uint8
+    assert img.shape[0] >= PREVIEW_MIN_HEIGHT
+    k = img.shape[0] // 64
+    assert img.shape == (64 * k, 4 * 64 * k + 3 * PREVIEW_GAP)
+    # The first panel is the exemplar, enlarged k-fold by nearest neighbour.
+    expected = np.rint(exemplar * (255 / 31)).astype(np.uint8)
+    np.testing.assert_array_equal(img[:, : 64 * k], np.kron(expected, np.ones((k, k), dtype=np.uint8)))
+    # Gaps between panels are white.
+    for i in range(1, 4):
+        start = i * 64 * k + (i - 1) * PREVIEW_GAP
+        assert np.all(img[:, start : start + PREVIEW_GAP] == 255)
+
+
+def _panel(img: np.ndarray, index: int, widths: list[int]) -> np.ndarray:
+    start = sum(widths[:index]) + index * PREVIEW_GAP
+    return img[:, start : start + widths[index]]
+
+
+def test_preview_bright_plane_in_front_panel(tmp_path):
+    Z, Y, X = 40, 32, 48
+    volume = np.zeros((Z, Y, X))
+    volume[Z // 2] = 1.0
+    exemplar = np.full((32, 32), 0.5)
+    img = _read_png(save_preview(tmp_path / "plane.png", exemplar, volume))
+    # Heights 32, 32, 32, 40 -> lcm 160 (>= 128): factors 5, 5, 5, 4.
+    assert img.shape[0] == 160
+    widths = [32 * 5, X * 5, Z * 5, X * 4]
+    assert img.shape[1] == sum(widths) + 3 * PREVIEW_GAP
+    assert np.all(_panel(img, 0, widths) == 128)  # 0.5 on the shared 0..1 scale
+    assert np.all(_panel(img, 1, widths) == 255)  # front: the bright plane itself
+    right = _panel(img, 2, widths)  # rows y, columns z: one bright column at z = Z//2
+    bright_cols = np.flatnonzero(right.min(axis=0) == 255) // 5
+    assert set(bright_cols) == {Z // 2}
+    top = _panel(img, 3, widths)  # rows z, columns x: one bright row at z = Z//2
+    bright_rows = np.flatnonzero(top.min(axis=1) == 255) // 4
+    assert set(bright_rows) == {Z // 2}
+
+
+def test_preview_orientation_of_side_panels(tmp_path):
+    # Distinct steps along z, y and x tell which axes each panel shows.
+    Z, Y, X = 6, 8, 10
+    z, y, x = np.meshgrid(np.arange(Z), np.arange(Y), np.arange(X), indexing="ij")
+    volume = (x + 10 * y + 100 * z).astype(np.float64)
+    exemplar = np.zeros((8, 8))
+    img = _read_png(save_preview(tmp_path / "o.png", exemplar, volume))
+    # Heights 8, 8, 8, 6 -> lcm 24, times 6 -> 144: factors 18, 18, 18, 24.
+    assert img.shape[0] == 144
+    widths = [8 * 18, X * 18, Z * 18, X * 24]
+    # The grey scale spans the shown panels only; the exemplar's 0 is their minimum.
+    hi = max(volume[Z // 2].max(), volume[:, :, X // 2].max(), volume[:, Y // 2, :].max())
+
+    def grey(a: np.ndarray) -> np.ndarray:
+        return np.rint(a * (255 / hi)).astype(np.uint8)
+
+    np.testing.assert_array_equal(_panel(img, 1, widths)[::18, ::18], grey(volume[Z // 2]))
+    np.testing.assert_array_equal(_panel(img, 2, widths)[::18, ::18], grey(volume[:, :, X // 2].T))
+    np.testing.assert_array_equal(_panel(img, 3, widths)[::24, ::24], grey(volume[:, Y // 2, :]))
+    right = _panel(img, 2, widths)[::18, ::18].astype(int)  # rows y (+10), columns z (+100)
+    assert right.shape == (Y, Z) and np.all(np.diff(right, axis=1) > np.diff(right, axis=0).max())
+
+
+def test_preview_awkward_heights_are_padded(tmp_path):
+    exemplar = np.zeros((64, 64))
+    volume = np.ones((100, 100, 100))
+    img = _read_png(save_preview(tmp_path / "pad.png", exemplar, volume))
+    assert img.shape[0] == PREVIEW_MIN_HEIGHT
+    widths = [128, 100, 100, 100]
+    assert img.shape[1] == sum(widths) + 3 * PREVIEW_GAP
+    assert np.all(_panel(img, 0, widths) == 0)
+    front = _panel(img, 1, widths)
+    assert np.all(front == 255)  # 1.0 is the top of the shared range, padding is white too
+
+
+@pytest.mark.parametrize(
+    "kwargs, param",
+    [
+        ({"path": "p.jpg"}, "path"),
+        ({"exemplar": np.zeros((2, 2, 2))}, "exemplar"),
+        ({"exemplar": np.array([[np.nan]])}, "exemplar"),
+        ({"volume": np.zeros((4, 4))}, "volume"),
+        ({"volume": np.full((2, 2, 2), np.inf)}, "volume"),
+        ({"levels": 1}, "levels"),
+        ({"levels": True}, "levels"),
+    ],
+)
+def test_preview_bad_input(tmp_path, kwargs, param):
+    args = {"path": "p.png", "exemplar": np.zeros((4, 4)), "volume": np.zeros((4, 4, 4))}
+    args.update(kwargs)
+    args["path"] = tmp_path / args["path"]
+    with pytest.raises(InputError, match=param):
+        save_preview(**args)
