@@ -13,9 +13,10 @@ from hypothesis import strategies as st
 from scipy import ndimage as ndi
 
 from clsolid.errors import InputError
-from clsolid.metrics import (autocorrelation, autocorrelation_distance, chord_lengths, dominant_orientation_deg,
-                             evaluate, first_order_stats, histogram_distance, lineal_path, orientation_histogram,
-                             patch_distance, quantise, structure_tensor_orientation, symmetric_kl, trace_fringes,
+from clsolid.metrics import (autocorrelation, autocorrelation_distance, chord_lengths,
+                             dominant_orientation_deg, evaluate, first_order_stats, histogram_distance,
+                             lineal_path, orientation_histogram, patch_distance, quantise,
+                             structure_tensor_orientation, symmetric_kl, trace_fringes,
                              two_point_correlation, view_slices, volume_fractions, wasserstein_1d)
 from clsolid.metrics.orientation import bin_centres_deg
 from clsolid.metrics.references import exemplar_halves, shuffled_stack, size_factor
@@ -80,7 +81,8 @@ def test_view_slices_shapes(shape, view, max_slices):
     vol = np.random.default_rng(0).random(shape)
     out = view_slices(vol, view, max_slices)
     axis = {"front": 0, "right": 2, "top": 1}[view]
-    rows_cols = {"front": (shape[1], shape[2]), "right": (shape[1], shape[0]), "top": (shape[0], shape[2])}[view]
+    rows_cols = {"front": (shape[1], shape[2]), "right": (shape[1], shape[0]),
+                 "top": (shape[0], shape[2])}[view]
     assert out.shape == (min(shape[axis], max_slices or shape[axis]), *rows_cols)
 
 
@@ -141,7 +143,8 @@ def test_histogram_distance_identical_and_symmetric():
 
 
 @settings(max_examples=30, deadline=None)
-@given(st.lists(st.floats(0.0, 1.0), min_size=4, max_size=64), st.lists(st.floats(0.0, 1.0), min_size=4, max_size=64))
+@given(st.lists(st.floats(0.0, 1.0), min_size=4, max_size=64),
+       st.lists(st.floats(0.0, 1.0), min_size=4, max_size=64))
 def test_histogram_distance_is_finite_and_non_negative(a, b):
     d = histogram_distance(np.array(a)[None], np.array(b)[None])
     assert math.isfinite(d) and d >= 0.0
@@ -378,7 +381,8 @@ def test_few_phase_exemplars_get_phase_metrics():
 def test_levels_quantise_histograms_and_enable_phases():
     rng = np.random.default_rng(3)
     ex = gaussian_field(rng, (2, 40, 40), 2.0)[0]
-    report = evaluate(ex, gaussian_field(rng, (16, 24, 24), 2.0), views=["top"], levels=2, reference_repeats=0)
+    report = evaluate(ex, gaussian_field(rng, (16, 24, 24), 2.0), views=["top"], levels=2,
+                      reference_repeats=0)
     assert report["settings"]["histogram"]["bins"] == 2
     assert "s2_l2" in report["views"]["top"]["distances"]
     d = report["views"]["top"]["distances"]["s2_l2"]

@@ -43,7 +43,8 @@ def files(tmp_path_factory):
 @pytest.fixture(scope="module")
 def report(files, tmp_path_factory):
     out = tmp_path_factory.mktemp("out") / "report.json"
-    assert run([files / "ex.npy", files / "vol.tif", "-o", out, "--repeats", "3", "--max-slices", "8"]) == EXIT_OK
+    argv = [files / "ex.npy", files / "vol.tif", "-o", out, "--repeats", "3", "--max-slices", "8"]
+    assert run(argv) == EXIT_OK
     return json.loads(out.read_text())
 
 

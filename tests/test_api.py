@@ -1,0 +1,139 @@
+"""The public API: inputs, errors, results, and that import touches no OpenCL."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import clsolid
+from clsolid import DeviceMemoryError, InputError, NoDeviceError
+from clsolid.params import HEURISTICS, MLParams, canonical_heuristic
+
+SMALL = dict(neighborhood=3, scales=1, levels=8)
+
+
+def test_import_does_not_touch_opencl():
+    code = "import sys, clsolid; assert 'pyopencl' not in sys.modules, 'imported pyopencl'"
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+@pytest.mark.parametrize("name, canonical", [
+    ("NP_ML_H2c", "h2-product"), ("ml_h2b", "h2-product"), ("ML_H1b", "h1-mean"), ("NP_ML_H1c", "h1-mean"),
+    ("NP_ML_H2b", "h2-max"), ("ML_H2a", "h2-min"), ("np_ml_h1a", "h1-lowest"), ("NP_ML_H1b", "h1-highest"),
+])
+def test_both_tag_sets_are_aliases(name, canonical):
+    assert canonical_heuristic(name) == canonical
+    assert set(HEURISTICS) == {"h1-lowest", "h1-highest", "h1-mean", "h2-min", "h2-max", "h2-product"}
+
+
+@pytest.mark.parametrize("kwargs, word", [
+    (dict(neighborhood=4), "neighborhood"), (dict(neighborhood=1), "neighborhood"),
+    (dict(scales=0), "scales"), (dict(views=1), "views"), (dict(levels=1), "levels"),
+    (dict(heuristic="best"), "heuristic"), (dict(xi=1.0), "xi"), (dict(stop_fraction=0), "stop_fraction"),
+    (dict(upsampling="2/8"), "upsampling"), (dict(inherited="maybe"), "inherited"),
+    (dict(bandwidth=(1.0,)), "bandwidth"), (dict(bandwidth_factor=-1), "bandwidth_factor"),
+    (dict(initial_temperature=0), "initial_temperature"),
+])
+def test_bad_parameters_name_themselves(kwargs, word):
+    with pytest.raises(InputError, match=word):
+        MLParams(**kwargs)
+
+
+@pytest.mark.parametrize("exemplar, shape, word", [
+    (np.zeros((4, 4, 4, 4)), (4, 4, 4), "exemplar"),
+    (np.zeros((0, 8)), (4, 4, 4), "exemplar"),
+    (np.full((16, 16), np.nan), (4, 4, 4), "exemplar"),
+    (np.zeros((16, 16), bool), (4, 4, 4), "exemplar"),
+    (np.zeros((16, 16), complex), (4, 4, 4), "exemplar"),
+    (np.zeros((16, 16), object), (4, 4, 4), "exemplar"),
+    (np.zeros((16, 16, 3), np.uint8), (4, 4, 4), "colour"),
+    (np.arange(256.0).reshape(16, 16), (4, 0, 4), "shape"),
+    (np.arange(256.0).reshape(16, 16), (4, -2, 4), "shape"),
+    (np.arange(256.0).reshape(16, 16), (4, 4), "shape"),
+    ("no-such-texture", (4, 4, 4), "exemplar"),
+])
+def test_bad_input_is_refused_clearly(exemplar, shape, word):
+    with pytest.raises(InputError, match=word):
+        clsolid.synthesize(exemplar, shape, device="reference", **SMALL)
+
+
+def test_exemplar_too_small_for_coarsest_scale():
+    with pytest.raises(InputError, match="too small.*coarsest"):
+        clsolid.synthesize(np.arange(400.0).reshape(20, 20), (8, 8, 8), neighborhood=9, scales=3,
+                           device="reference")
+
+
+def test_unknown_option_and_method():
+    ex = np.arange(256.0).reshape(16, 16)
+    with pytest.raises(InputError, match="unknown option"):
+        clsolid.synthesize(ex, (4, 4, 4), device="reference", temprature=3, **SMALL)
+    with pytest.raises(InputError, match="planned"):
+        clsolid.synthesize(ex, (4, 4, 4), method="kopf", device="reference", **SMALL)
+
+
+def test_memory_is_checked_before_allocating(device, monkeypatch):
+    """A volume too large for the device's max buffer fails up front, naming the buffer."""
+    monkeypatch.setattr(type(device), "max_alloc", property(lambda self: 1 << 20))
+    with pytest.raises(DeviceMemoryError, match="volume") as info:
+        clsolid.synthesize("brick", (128, 128, 128), device=device, **SMALL)
+    assert info.value.nbytes == 128**3 * 4 and info.value.limit == 1 << 20
+    assert isinstance(info.value, MemoryError)
+
+
+def test_no_platform_says_how_to_install(monkeypatch):
+    import pyopencl as cl
+
+    monkeypatch.setattr(cl, "get_platforms", lambda: [])
+    with pytest.raises(NoDeviceError, match="pocl"):
+        clsolid.select_device()
+    with pytest.raises(NoDeviceError, match="pocl"):
+        clsolid.list_devices()
+
+
+def test_select_device_by_syntax_and_name(device):
+    assert clsolid.select_device(device) is device
+    name = device.device.name.strip()
+    assert clsolid.select_device(name[:6]).device.int_ptr == device.device.int_ptr
+    assert clsolid.select_device("0:0").device is not None
+    with pytest.raises(NoDeviceError, match="no OpenCL device matches"):
+        clsolid.select_device("definitely-not-a-device")
+    with pytest.raises(NoDeviceError, match="index 99"):
+        clsolid.select_device("0:99")
+
+
+def test_list_devices_describes_each_device(device):
+    devices = clsolid.list_devices()
+    assert devices and {"index", "platform", "name", "type", "compute_units", "global_mem", "max_alloc",
+                        "fp64"} <= set(devices[0])
+
+
+def test_result_object_reports_everything(device):
+    r = clsolid.synthesize("brick", (8, 10, 12), rng=5, device=device, full_output=True, **SMALL)
+    assert r.volume.shape == (8, 10, 12) and r.volume.dtype == np.uint8
+    assert r.volume.max() < 8 and r.seed == 5
+    assert r.params["neighborhood"] == 3 and r.params["heuristic"] == "h2-product"
+    assert len(r.params["bandwidth_effective"]) == 1 and r.params["bandwidth_effective"][0] > 0
+    assert r.timings["total_s"] > 0 and r.timings["scales"][0]["sweeps"] >= 1
+    assert r.grey().shape == r.volume.shape and r.level_values.size == 8
+    np.testing.assert_array_equal(clsolid.synthesize("brick", (8, 10, 12), rng=5, device=device, **SMALL), r.volume)
+
+
+def test_progress_reports_every_sweep(device):
+    seen = []
+    r = clsolid.synthesize("brick", (8, 8, 8), rng=1, device=device, progress=seen.append, full_output=True,
+                           neighborhood=3, scales=2, levels=8)
+    assert len(seen) == sum(s["sweeps"] for s in r.timings["scales"])
+    last = seen[-1]
+    assert last.scale == 2 and last.volume().shape == (8, 8, 8) and last.elapsed > 0
+    assert [i.temperature for i in seen if i.scale == 2] == r.timings["scales"][1]["temperatures"]
+
+
+def test_rng_generator_and_none():
+    ex = np.arange(256.0).reshape(16, 16)
+    a = clsolid.synthesize(ex, (4, 4, 4), device="reference", full_output=True,
+                           rng=np.random.default_rng(3), **SMALL)
+    b = clsolid.synthesize(ex, (4, 4, 4), device="reference", full_output=True, rng=None, **SMALL)
+    assert a.seed != b.seed
+    with pytest.raises(InputError, match="rng"):
+        clsolid.synthesize(ex, (4, 4, 4), device="reference", rng=-1, **SMALL)

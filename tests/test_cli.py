@@ -1,0 +1,74 @@
+"""The command-line runner: outputs, sidecar, progress, exit codes."""
+
+import json
+
+import numpy as np
+import pytest
+
+from clsolid.cli import EXIT_MEMORY, EXIT_NO_DEVICE, EXIT_USAGE, main
+from clsolid.volumeio import load_volume
+
+FAST = ["--shape", "8", "10", "12", "--neighborhood", "3", "--scales", "2", "--levels", "8", "--seed", "3"]
+
+
+def test_synth_writes_volume_sidecar_preview_and_track(tmp_path, capsys, device):
+    out = tmp_path / "v.tif"
+    code = main(["synth", "brick", "-o", str(out), *FAST, "--voxel-size", "2", "0.5", "0.5",
+                 "--preview", str(tmp_path / "p.png"), "--track", str(tmp_path / "t.json"),
+                 "--device", device.device.name.strip()[:8]])
+    assert code == 0
+    vol, info = load_volume(out)
+    assert vol.shape == (8, 10, 12) and vol.max() < 8
+    assert info["voxel_size"] == pytest.approx((2.0, 0.5, 0.5))
+    meta = json.loads((tmp_path / "v.json").read_text())
+    assert meta["seed"] == 3 and meta["params"]["neighborhood"] == 3 and meta["params"]["levels"] == 8
+    assert meta["versions"]["clsolid"] and meta["device"]
+    assert len(meta["timings"]["scales"]) == 2 and meta["timings"]["scales"][0]["sweep_seconds"]
+    assert (tmp_path / "p.png").stat().st_size > 100
+    track = json.loads((tmp_path / "t.json").read_text())
+    assert len(track["records"]) == sum(s["sweeps"] for s in meta["timings"]["scales"])
+    assert {"autocorrelation_front", "histogram_kl_right"} <= set(track["records"][0]["indicators"])
+    err = capsys.readouterr().err
+    assert "scale 2/2" in err and "sweep" in err and "ETA" in err and "wrote" in err
+
+
+def test_same_seed_same_file(tmp_path, device):
+    for name in ("a.npy", "b.npy"):
+        assert main(["synth", "-o", str(tmp_path / name), *FAST, "-q", "--device", "0:0"]) == 0
+    np.testing.assert_array_equal(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
+
+
+def test_quiet_is_quiet(tmp_path, capsys, device):
+    assert main(["synth", "-o", str(tmp_path / "v.npy"), *FAST, "-q"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("argv, code, words", [
+    (["--levels", "1"], EXIT_USAGE, "levels"),
+    (["--neighborhood", "4"], EXIT_USAGE, "neighborhood"),
+    (["--device", "no-such-device-anywhere"], EXIT_NO_DEVICE, "no OpenCL device matches"),
+])
+def test_user_errors_get_exit_codes_and_no_traceback(tmp_path, capsys, argv, code, words, device):
+    base = ["synth", "-o", str(tmp_path / "v.npy"), "--shape", "8", "8", "8", "--scales", "1", "-q"]
+    assert main(base + argv) == code
+    err = capsys.readouterr().err
+    assert words in err and "Traceback" not in err
+
+
+def test_bad_output_extension(tmp_path, capsys):
+    assert main(["synth", "-o", str(tmp_path / "v.raw"), "-q"]) == EXIT_USAGE
+    assert ".tif" in capsys.readouterr().err
+
+
+def test_out_of_memory_exit_code(tmp_path, capsys, device, monkeypatch):
+    from clsolid.device import Device
+
+    monkeypatch.setattr(Device, "max_alloc", property(lambda self: 1 << 16))
+    assert main(["synth", "-o", str(tmp_path / "v.npy"), "--shape", "64", "64", "64", "-q"]) == EXIT_MEMORY
+    assert "max_mem_alloc_size" in capsys.readouterr().err
+
+
+def test_devices_lists_a_table(capsys, device):
+    assert main(["devices"]) == 0
+    out = capsys.readouterr().out
+    assert "platform / name" in out and device.device.name.strip() in out

@@ -1,0 +1,79 @@
+"""The OpenCL kernels against the float64 NumPy reference, on small inputs."""
+
+import numpy as np
+import pytest
+from conftest import random_state
+
+from clsolid.cl_backend import CLBackend, group_tables
+from clsolid.ml_model import build_scale
+from clsolid.params import MLParams
+from clsolid.reference import ReferenceBackend
+
+
+def _pair(device, labels_img, shape, vol, temp, **kw):
+    params = MLParams(**kw)
+    model = build_scale(labels_img, shape, params, 0)
+    cl_b, ref = CLBackend(device), ReferenceBackend()
+    for b in (cl_b, ref):
+        b.start_scale(model, vol, temp, params)
+    return model, cl_b, ref
+
+
+@pytest.mark.parametrize("k, views", [(3, 2), (5, 3), (7, 2), (11, 2)])
+def test_per_label_log_lcpdf_matches_reference(device, small_labels, k, views):
+    shape = (7, 9, 11)
+    model = build_scale(small_labels, shape, MLParams(neighborhood=k, views=views, scales=1), 0)
+    vol, temp = random_state(model)
+    model, cl_b, ref = _pair(device, small_labels, shape, vol, temp, neighborhood=k, views=views, scales=1)
+    voxels = np.arange(0, vol.size, 3)
+    got, want = cl_b.lcpdf(voxels), ref.lcpdf(voxels)
+    assert got.shape == want.shape == (views, voxels.size, model.labels.size)
+    # float32 with max-subtraction: absolute error on log-probabilities
+    np.testing.assert_allclose(got, want, atol=2e-3 * max(1.0, np.abs(want).max() / 100))
+
+
+def test_no_underflow_for_11x11_and_256_levels(device):
+    """Distances far beyond float32's exp range still give finite, exact log-LCPDFs."""
+    rng = np.random.default_rng(5)
+    labels_img = rng.integers(0, 256, (24, 24))
+    shape = (5, 12, 12)
+    params = MLParams(neighborhood=11, scales=1, levels=None, bandwidth=2.0)
+    model = build_scale(labels_img, shape, params, 0)
+    vol = rng.integers(0, 256, shape).astype(float)
+    temp = np.zeros(shape)
+    model, cl_b, ref = _pair(device, labels_img, shape, vol, temp, neighborhood=11, scales=1,
+                             levels=None, bandwidth=2.0)
+    voxels = np.arange(0, vol.size, 7)
+    want = ref.lcpdf(voxels)
+    assert want.min() < -1000  # exp() underflows below about -104 in float32
+    got = cl_b.lcpdf(voxels)
+    assert np.isfinite(got).all()
+    np.testing.assert_allclose(got, want, rtol=2e-5, atol=1e-2)
+
+
+def test_group_tables_cover_every_site_once(small_labels):
+    model = build_scale(small_labels, (8, 8, 8), MLParams(neighborhood=5, scales=1), 0)
+    patches, chunk_group, chunk_valid, values = group_tables(model, 16)
+    assert chunk_valid.sum() == model.n_sites
+    np.testing.assert_array_equal(values, np.unique(model.centres))
+    # the real lanes of every group's chunks hold exactly that group's sites
+    for g, v in enumerate(values):
+        lanes = np.concatenate([patches[c, :, : chunk_valid[c]].T for c in np.flatnonzero(chunk_group == g)])
+        want = model.patches[:, model.centres == v].T
+        assert sorted(map(tuple, lanes)) == sorted(map(tuple, want))
+
+
+@pytest.mark.parametrize("heuristic", ["h2-product", "h2-min", "h2-max", "h1-lowest", "h1-highest", "h1-mean"])
+def test_one_icm_step_matches_reference(device, small_labels, heuristic):
+    shape = (6, 8, 10)
+    params = dict(neighborhood=5, views=3, scales=1, heuristic=heuristic)
+    model = build_scale(small_labels, shape, MLParams(**params), 0)
+    vol, temp = random_state(model, seed=2)
+    model, cl_b, ref = _pair(device, small_labels, shape, vol, temp, **params)
+    voxels = np.flatnonzero(model.colour.ravel() == 0)
+    for b in (cl_b, ref):
+        b.update(voxels)
+    np.testing.assert_array_equal(cl_b.volume().ravel()[voxels], ref.volume().ravel()[voxels])
+    np.testing.assert_allclose(cl_b.temperature(), ref.temperature(), atol=1e-6)
+    untouched = np.setdiff1d(np.arange(vol.size), voxels)
+    np.testing.assert_array_equal(cl_b.volume().ravel()[untouched], vol.ravel()[untouched])
