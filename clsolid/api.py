@@ -115,11 +115,12 @@ def synthesize(
         temperature has fallen by this fraction, or reaches 0), ``max_sweeps`` (30 per scale),
         ``upsampling`` (``"1/8"`` or ``"8/8"``), ``inherited`` (``"resynthesize"`` with t held
         at 0, or ``"fixed"``), ``insert_slices`` (exemplar slices tiled onto this many slices
-        of each constrained view at the start and trusted (t = 0), the thesis's ``+in``; default 2;
+        of each constrained view at the start and trusted (t = 0), the thesis's ``+in``; default 4;
         0 gives the ``-in`` start, which collapses to the mode under ICM),
         ``initial_temperature`` (1),
         ``bandwidth`` (Parzen h, one value or one per scale finest first; default Silverman's
-        rule per scale), ``builtin_size``, and OpenCL tuning: ``vector_width``,
+        rule per scale), ``bandwidth_factor`` (multiplies Silverman's h; 0.3 measured better
+        on brick, see the README), ``builtin_size``, and OpenCL tuning: ``vector_width``,
         ``voxels_per_item``, ``local_size``, ``max_batch``.
 
     Returns

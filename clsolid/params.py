@@ -78,7 +78,7 @@ class MLParams:
     max_sweeps: int = 30
     upsampling: str = "1/8"
     inherited: str = "resynthesize"
-    insert_slices: int = 2
+    insert_slices: int = 4
     initial_temperature: float = 1.0
     bandwidth_factor: float = 1.0
     bandwidth: tuple[float, ...] | None = field(default=None)

@@ -22,8 +22,6 @@ from .metrics import VIEWS, evaluate
 #: Exit codes of :func:`main_evaluate`.
 EXIT_OK, EXIT_INPUT, EXIT_NO_MATPLOTLIB = 0, 2, 3
 INSTALL_HINT = 'install it with pip install "clsolid[report]" or pip install matplotlib'
-_IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".gif")
-_TIFF_SUFFIXES = (".tif", ".tiff")
 
 
 class PlottingUnavailable(ClsolidError, ImportError):
@@ -129,66 +127,24 @@ def _run_track(args: argparse.Namespace) -> None:
 # ----------------------------------------------------------------------------- reading
 
 
-def _read_array(path: Any, param: str) -> np.ndarray:
-    p = pathlib.Path(path)
-    suffix = p.suffix.lower()
-    if not p.is_file():
-        raise InputError(f"{param}={str(path)!r} is not a file")
-    try:
-        if suffix == ".npy":
-            return np.load(p, allow_pickle=False)
-        if suffix in _TIFF_SUFFIXES:
-            import tifffile
-
-            return tifffile.imread(p)
-        if suffix in _IMAGE_SUFFIXES:
-            import skimage.io
-
-            return skimage.io.imread(p)
-    except (ValueError, OSError) as err:
-        raise InputError(f"{param}={str(path)!r} could not be read: {err}") from None
-    raise InputError(f"{param}={str(path)!r} has suffix {suffix!r}; use .npy, .tif, .tiff or .png")
-
-
 def load_exemplar(path: Any) -> np.ndarray:
-    """Read a 2D grey exemplar from .npy, .tif/.tiff or .png (grey, or colour with equal channels).
+    """Read a 2D grey exemplar (.npy, .tif/.tiff, .png, or a built-in name).
 
-    Parameters
-    ----------
-    path : str or path-like
-        The file.
-
-    Returns
-    -------
-    numpy.ndarray
-        The 2D image, dtype as stored.
+    The same reader as :func:`clsolid.synthesize` uses: see :func:`clsolid.exemplar.load_exemplar`.
     """
-    arr = _read_array(path, "EXEMPLAR")
-    if arr.ndim == 3 and arr.shape[-1] in (3, 4):
-        rgb = arr[..., :3]
-        if not (np.array_equal(rgb[..., 0], rgb[..., 1]) and np.array_equal(rgb[..., 0], rgb[..., 2])):
-            raise InputError(f"EXEMPLAR={str(path)!r} is a colour image; convert it to grey first")
-        arr = rgb[..., 0]
-    arr = _squeeze(arr)
-    if arr.ndim != 2:
-        raise InputError(f"EXEMPLAR={str(path)!r} holds an array of shape {arr.shape}; expected a 2D image")
-    return arr
+    from .exemplar import load_exemplar as _load
+
+    return _load(str(path) if isinstance(path, pathlib.PurePath) else path)
 
 
 def load_volume(path: Any) -> np.ndarray:
-    """Read a 3D ``(Z, Y, X)`` volume from .npy or .tif/.tiff (singleton axes are dropped).
+    """Read a 3D ``(Z, Y, X)`` volume from .npy or .tif/.tiff (leading singleton axes dropped).
 
-    Parameters
-    ----------
-    path : str or path-like
-        The file.
-
-    Returns
-    -------
-    numpy.ndarray
-        The 3D volume, dtype as stored.
+    Uses :func:`clsolid.volumeio.load_volume`.
     """
-    arr = _squeeze(_read_array(path, "VOLUME"))
+    from .volumeio import load_volume as _load
+
+    arr = _squeeze(_load(path)[0])
     if arr.ndim != 3:
         raise InputError(f"VOLUME={str(path)!r} holds an array of shape {arr.shape}; expected (Z, Y, X)")
     return arr
@@ -356,7 +312,8 @@ def _require_matplotlib() -> tuple[Any, Any]:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
     except ImportError:
-        raise PlottingUnavailable(f"plotting needs matplotlib, which is not installed; {INSTALL_HINT}") from None
+        raise PlottingUnavailable(
+            f"plotting needs matplotlib, which is not installed; {INSTALL_HINT}") from None
     return Figure, FigureCanvasAgg
 
 
@@ -436,6 +393,7 @@ def _orientation_panel(ax: Any, view: dict) -> None:
     o = view.get("orientation")
     if o is None:
         ax.text(0.5, 0.5, "orientation skipped", ha="center", transform=ax.transAxes)
+        ax.set_axis_off()
         return
     ax.plot(o["bin_centres_deg"], o["exemplar"]["histogram"], color="k")
     ax.plot(o["bin_centres_deg"], o["volume"]["histogram"], color="r")
@@ -459,6 +417,7 @@ def _fringe_panel(ax: Any, view: dict) -> None:
     f = view.get("fringes")
     if f is None or f["exemplar"]["length_hist"] is None or f["volume"]["length_hist"] is None:
         ax.text(0.5, 0.5, "no fringe distribution", ha="center", transform=ax.transAxes)
+        ax.set_axis_off()
         return
     edges = np.array(f["length_edges"])
     centres = 0.5 * (edges[1:] + edges[:-1])
@@ -471,6 +430,7 @@ def _fringe_panel(ax: Any, view: dict) -> None:
 def _s2_panel(ax: Any, view: dict) -> None:
     p = view.get("phases")
     if not p:
+        ax.set_axis_off()
         return
     for curve in p["curves"]:
         if curve["phase"] != len(p["phase_values"]) - 1:

@@ -62,7 +62,7 @@ def test_temperature_stop_rule(device, small_labels):
 
 
 def test_max_sweeps_bounds_a_scale(device, small_labels):
-    params = MLParams(neighborhood=3, scales=1, max_sweeps=2, stop_fraction=1.0)
+    params = MLParams(neighborhood=3, scales=1, max_sweeps=2, stop_fraction=1.0, insert_slices=0)
     _, timings, _ = run_ml(small_labels, (8, 8, 8), params, 1, CLBackend(device))
     assert timings["scales"][0]["sweeps"] == 2
 

@@ -87,13 +87,13 @@ def test_format_table_marks_constrained_and_uninformative(report):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["missing.npy", "vol.tif"], "is not a file"),
+    (["missing.npy", "vol.tif"], "does not exist"),
     (["ex.npy"], "EXEMPLAR and VOLUME"),
     (["ex.npy", "vol.tif", "--levels", "1"], "levels"),
     (["ex.npy", "vol.tif", "--max-slices", "-1"], "max-slices"),
-    (["vol.tif", "vol.tif"], "expected a 2D image"),
+    (["vol.tif", "vol.tif"], "must be one 2D image"),
     (["ex.npy", "ex.npy"], "expected (Z, Y, X)"),
-    (["ex.npy", "vol.txt"], "suffix"),
+    (["ex.npy", "vol.txt"], "unsupported extension"),
 ])
 def test_input_errors_exit_2_without_traceback(files, capsys, argv, message):
     (files / "vol.txt").write_text("not a volume")

@@ -55,10 +55,23 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
     Returns
     -------
     dict
-        JSON-able report: ``settings`` (every choice made), ``exemplar``, ``volume``,
-        ``views`` (per view: constrained flag, first-order statistics, ``distances`` each
-        with ``value``, ``floor``, ``ceiling``, ``informative``, ``score``, ``note``, and the
-        curves behind them) and ``summary`` (one row per view and distance).
+        JSON-able report (Python types only; NaN never appears, undefined values are None):
+        ``settings`` (every choice made, and the families skipped and why), ``exemplar``,
+        ``volume``, ``views`` and ``summary`` (one row per view and distance). Each view
+        holds its ``constrained`` flag and ``label``, the slice indices used, first-order
+        ``stats``, the curves behind each distance (histograms, autocorrelation maps,
+        orientation histograms, fringe and phase statistics) and ``distances``; each
+        distance has ``value``; ``floor``: mean, std, min, max, n of the distances between
+        random halves of the exemplar rescaled to this comparison's sample sizes, with the
+        raw halves values under ``halves``; ``ceiling``: the same between the exemplar and
+        shuffled pixels or uniform noise (``kind``); ``informative``: whether the ceiling
+        exceeds the floor by 3 combined standard deviations; ``score``:
+        ``(value - floor) / (ceiling - floor)`` when informative, else None; ``note``.
+
+    Notes
+    -----
+    Cost grows with the slices measured: the defaults take about 4 s for a 128^3 volume
+    and 17 s for 256^3 on two CPU cores, most of it tracing fringes.
     """
     ex = as_image(exemplar, "exemplar", min_side=MIN_EXEMPLAR_SIDE)
     vol = as_volume(volume, "volume", min_side=MIN_VOLUME_SIDE)
@@ -124,8 +137,10 @@ def _ceilings(families: list[Family], setup: Setup, ex_features: dict, key: tupl
     return out
 
 
-def _view_report(view: str, shape: tuple, stack: np.ndarray, max_slices: int | None, is_constrained: bool,
-                 families: list[Family], setup: Setup, ex_features: dict, floors: dict, ceilings: dict) -> dict:
+def _view_report(view: str, shape: tuple, stack: np.ndarray, max_slices: int | None,
+                 is_constrained: bool, families: list[Family], setup: Setup, ex_features: dict,
+                 floors: dict, ceilings: dict) -> dict:
+    """Everything measured on one view's slices, each distance with its floor and ceiling."""
     axis = {"front": 0, "right": 2, "top": 1}[view]
     out: dict[str, Any] = {
         "constrained": is_constrained,

@@ -80,6 +80,8 @@ class Family:
 
 
 class HistogramFamily(Family):
+    """Grey-level histograms (quantised when ``levels`` is set); symmetric KL."""
+
     name = "histogram"
     distances = (Distance("histogram_kl", "grey-level histogram, symmetric KL", "nats", "noise", 1.0),)
 
@@ -97,6 +99,8 @@ class HistogramFamily(Family):
 
 
 class AutocorrelationFamily(Family):
+    """Mean normalised autocorrelation maps; RMS difference over the shared lag window."""
+
     name = "autocorrelation"
     distances = (Distance("autocorrelation_l2", "autocorrelation, RMS difference over lags",
                           "correlation", "shuffle"),)
@@ -114,6 +118,8 @@ class AutocorrelationFamily(Family):
 
 
 class OrientationFamily(Family):
+    """Coherence-weighted structure-tensor orientation histograms; symmetric KL."""
+
     name = "orientation"
     distances = (Distance("orientation_kl", "coherence-weighted orientation histogram, symmetric KL",
                           "nats", "shuffle", 1.0),)
@@ -133,15 +139,19 @@ class OrientationFamily(Family):
                     "dominant_gradient_deg": dom,
                     "dominant_fringe_deg": None if dom is None else (dom + 180.0) % 180.0 - 90.0}
         return {"bin_centres_deg": orientation.bin_centres_deg(), "exemplar": side(fa), "volume": side(fb),
-                "convention": "angle of the dominant gradient, counter-clockwise from the column "
-                              "axis with rows pointing down; fringes run at +90 degrees"}
+                "convention": "degrees, angle of the dominant gradient counter-clockwise from the "
+                              "column (x) axis as displayed (row 0 at the top); fringes run at +90"}
 
 
 class FringeFamily(Family):
+    """Level-curve fringes at the exemplar mean: length and straightness distributions."""
+
     name = "fringes"
-    distances = (Distance("fringe_length_w1", "fringe length distribution, Wasserstein-1", "pixels", "shuffle"),
+    distances = (Distance("fringe_length_w1", "fringe length distribution, Wasserstein-1", "pixels",
+                          "shuffle"),
                  Distance("fringe_straightness_w1",
-                          "fringe tortuosity: Wasserstein-1 of straightness = 1/tortuosity", "ratio", "shuffle"))
+                          "fringe tortuosity: Wasserstein-1 of straightness = 1/tortuosity", "ratio",
+                          "shuffle"))
 
     def features(self, stack, periodic):
         return fringes.trace_stack(stack, level=self.setup.fringe_level, periodic=periodic,
@@ -172,6 +182,8 @@ class FringeFamily(Family):
 
 
 class PatchFamily(Family):
+    """Multi-scale 5x5 patch distributions; sliced Wasserstein-2."""
+
     name = "patches"
     distances = (Distance("patch_sw", "k x k patch distribution, sliced Wasserstein-2",
                           "exemplar std", "shuffle"),)
@@ -195,6 +207,8 @@ VIEW_AXES = {"front": ("y", "x"), "right": ("y", "z"), "top": ("z", "x")}
 
 
 class PhaseFamily(Family):
+    """Few-phase descriptors: volume fractions, S2, lineal path and chord lengths."""
+
     name = "phases"
     distances = (
         Distance("volume_fraction_tv", "volume fractions, total variation", "fraction", "noise"),
@@ -281,8 +295,9 @@ def make_setup(exemplar: np.ndarray, volume_range: tuple[float, float], slice_sh
     max_lag = min(autocorr.DEFAULT_LAGS, half // 2, min(min(s) for s in slice_shapes) // 2)
     scales = tuple(s for s in patches.usable_scales((half, half))
                    if all(s in patches.usable_scales(shape) for shape in slice_shapes))
-    return Setup(exemplar=exemplar, periodic=periodic, levels=levels, ex_range=(lo, hi), integer_valued=integer,
-                 hist_edges=edges, fringe_level=float(exemplar.mean()), fringe_cap=float(smallest), max_lag=max_lag,
+    return Setup(exemplar=exemplar, periodic=periodic, levels=levels, ex_range=(lo, hi),
+                 integer_valued=integer, hist_edges=edges, fringe_level=float(exemplar.mean()),
+                 fringe_cap=float(smallest), max_lag=max_lag,
                  phase_values=phases.phase_values(grey_ex), patch_scales=scales, rng=rng)
 
 
@@ -294,7 +309,8 @@ def make_families(setup: Setup) -> tuple[list[Family], dict[str, str]]:
     if side >= 40:
         out.append(OrientationFamily(setup))
     else:
-        skipped["orientation"] = "exemplar smaller than 40 pixels: its halves leave no pixels inside the 7x7 windows"
+        skipped["orientation"] = ("exemplar smaller than 40 pixels: its halves leave too few pixels "
+                                  "away from the borders of the 7x7 windows")
     if setup.fringe_cap >= 2 * fringes.MIN_EXTENT:
         out.append(FringeFamily(setup))
     else:

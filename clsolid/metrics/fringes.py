@@ -87,7 +87,8 @@ def trace_fringes(image: Any, *, level: float | None = None, periodic: bool = Fa
     side = min(img.shape)
     cap = side / 2 if max_extent is None else float(max_extent)
     if not 0 < cap < side:
-        raise InputError(f"max_extent={max_extent!r} must be in (0, {side}) for an image of shape {img.shape}")
+        raise InputError(f"max_extent={max_extent!r} must be in (0, {side}) for an image of "
+                         f"shape {img.shape}")
     if smooth > 0:
         img = ndi.gaussian_filter(img, smooth, mode="wrap" if periodic else "reflect")
     level = float(img.mean()) if level is None else float(level)

@@ -109,7 +109,8 @@ def patch_distance(exemplar: Any, slices: Any, *, scales: tuple[int, ...] = SCAL
     ex = as_image(exemplar, "exemplar")
     sl = as_stack(slices, "slices")
     patch = check_int(patch, "patch", 1)
-    use = tuple(s for s in usable_scales(ex.shape, patch, scales) if s in usable_scales(sl.shape[1:], patch, scales))
+    both = set(usable_scales(sl.shape[1:], patch, scales))
+    use = tuple(s for s in usable_scales(ex.shape, patch, scales) if s in both)
     if not use:
         raise InputError(f"no scale in scales={scales!r} leaves {patch + 1} pixels per side of "
                          f"exemplar {ex.shape} and slices {sl.shape[1:]}")

@@ -2,9 +2,10 @@
 
 The floor is the distance between two halves of the exemplar: what a volume "as good as the
 exemplar itself" scores, once rescaled from the halves' sample sizes to those of the real
-comparison (see :func:`size_factor`; the raw halves distances are kept too). The ceiling is the distance between the exemplar and slices of the
-same shape filled with its shuffled pixels ("shuffle"), or, for distances that shuffling
-cannot change (histograms, volume fractions), with uniform noise over its range ("noise").
+comparison (see :func:`size_factor`; the raw halves distances are kept too). The ceiling is
+the distance between the exemplar and as many slices as the view, of the same shape, filled
+with its shuffled pixels ("shuffle"), or, for distances that shuffling cannot change
+(histograms, volume fractions), with uniform noise over its range ("noise").
 Each is repeated to measure its spread; a distance is *informative* for an exemplar only
 when its ceiling exceeds its floor by more than :data:`SEPARATION` times their combined
 standard deviation.
@@ -110,7 +111,8 @@ def readable(value: float | None, floor: dict | None, ceiling: dict | None) -> d
     halves of the exemplar, about 1 means no more structure than shuffled pixels.
     """
     if value is None:
-        return {"informative": False, "score": None, "note": "not measurable here (e.g. too few fringes or chords)"}
+        return {"informative": False, "score": None,
+                "note": "not measurable here (e.g. too few fringes or chords)"}
     if floor is None or ceiling is None:
         missing = "floor" if floor is None else "ceiling"
         return {"informative": None, "score": None,
