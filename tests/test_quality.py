@@ -32,24 +32,38 @@ def test_default_settings_beat_no_structure(device, brick_labels):
         assert hist < s["noise_hist"], f"{view}: histogram KL {hist:.3f} vs noise {s['noise_hist']:.3f}"
 
 
-def _close(brick_labels, vol):
-    s = _scores(brick_labels, vol)
+def _close(brick_labels, vol, metrics_=("autocorrelation_l2", "histogram_kl")):
+    """Calibrated scores: 0 = as close as two halves of the exemplar, 1 = no structure
+    (shuffled pixels; uniform noise for the histogram). "Far closer than no structure" is
+    read as a score below 0.3 on both constrained views."""
+    report = metrics.evaluate(brick_labels, vol, views=("front", "right"), reference_repeats=3)
+    scores = {(r["view"], r["metric"]): r["score"] for r in report["summary"]}
     for view in ("front", "right"):
-        acd, hist = s[view]
-        assert acd < 0.5 * s["shuffled_acd"], f"{view}: autocorrelation {acd:.3f} vs shuffled {s['shuffled_acd']:.3f}"
-        assert hist < 0.5 * s["noise_hist"], f"{view}: histogram KL {hist:.3f} vs noise {s['noise_hist']:.3f}"
+        for metric in metrics_:
+            assert scores[view, metric] < 0.3, f"{view} {metric}: score {scores[view, metric]:.2f}"
 
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="issue 2 point 16 not met: with Silverman's bandwidth the ICM is "
-                   "mode-seeking on brick; autocorrelation distance is ~0.67x that of shuffled pixels")
+                   "mode-seeking on brick (autocorrelation and histogram scores about 0.45)")
 def test_thesis_case_is_statistically_close(device, brick_labels):
     """Issue 2, point 16: brick 64x64 -> 64^3, 9x9, 3 scales, 1/8, re-synthesis, h2-product,
     xi=-3, 95 %, 32 levels, 2 views: both constrained views far closer than structureless volumes."""
     _close(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device))
 
 
+@pytest.fixture(scope="module")
+def narrow_volume(device):
+    """The thesis case at 0.3 x Silverman's bandwidth, grown once per device."""
+    return clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device, bandwidth_factor=0.3)
+
+
 @pytest.mark.slow
-def test_narrower_bandwidth_is_statistically_close(device, brick_labels):
-    """The same case with 0.3 x Silverman's bandwidth meets the criterion."""
-    _close(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device, bandwidth_factor=0.3))
+@pytest.mark.parametrize("metric", [
+    "autocorrelation_l2",
+    pytest.param("histogram_kl", marks=pytest.mark.xfail(
+        strict=True, reason="histogram score 0.32: ICM still over-uses the dominant dark level")),
+])
+def test_narrower_bandwidth_is_statistically_close(narrow_volume, brick_labels, metric):
+    """The same case with 0.3 x Silverman's bandwidth (autocorrelation score 0.13)."""
+    _close(brick_labels, narrow_volume, (metric,))

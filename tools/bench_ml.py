@@ -80,7 +80,7 @@ def main(argv=None) -> None:
         rate, dt = kernel_rate(device, labels, shape, k)
         gflops = 3 * rate / 1e9
         print(f"\n== case ({case}) {title}: brick 64x64, 32 levels -> {shape}, 3 scales, 1/8, "
-              "re-synthesis, h2-product, xi=-3, 95%, 2 views, 2 trusted +in slices")
+              f"re-synthesis, h2-product, xi=-3, 95%, 2 views, {MLParams().insert_slices} trusted +in slices")
         print(f"Parzen kernel: {rate / 1e9:.2f} G terms/s = {gflops:.1f} GFLOP/s at 3 flops/term "
               f"= {100 * gflops / ref:.0f}% of matmul ({dt * 1e3:.0f} ms for 8192 voxels x 2 views)")
         timings = run_case(device, labels, shape, k, args.seed)
