@@ -13,6 +13,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
 from .params import HEURISTICS, INHERITED, UPSAMPLING
 
@@ -185,8 +187,11 @@ def cmd_synth(args) -> int:
                         full_output=True, **options)
     written = save_volume(args.output, result.volume, voxel_size=voxel_size, unit=args.unit,
                           metadata={"seed": result.seed, "levels": int(result.level_values.size)})
+    # the exemplar in the volume's grey-level indices, so `clsolid evaluate` compares like with like
+    exemplar_file = save_volume(written.with_name(f"{written.stem}_exemplar{written.suffix}"),
+                                result.exemplar[np.newaxis])
     sidecar = written.with_suffix(".json")
-    meta = {"volume": str(written), "exemplar": str(args.exemplar) if not hasattr(args.exemplar, "shape") else "array",
+    meta = {"volume": str(written), "quantised_exemplar": str(exemplar_file), "exemplar": str(args.exemplar) if not hasattr(args.exemplar, "shape") else "array",
             "seed": result.seed, "device": result.device, "params": result.params,
             "level_values": result.level_values.tolist(), "voxel_size": voxel_size, "unit": args.unit,
             "versions": versions(), "timings": result.timings,
@@ -200,7 +205,8 @@ def cmd_synth(args) -> int:
                                           "records": records}, indent=2))
     if not args.quiet:
         print(f"wrote {written} ({'x'.join(map(str, result.volume.shape))}, seed {result.seed}, "
-              f"{result.timings['total_s']:.1f}s on {result.device}) and {sidecar}", file=sys.stderr)
+              f"{result.timings['total_s']:.1f}s on {result.device}), {sidecar} and {exemplar_file}",
+              file=sys.stderr)
     return EXIT_OK
 
 

@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+from clsolid.exemplar import builtin_exemplar, quantise
 from clsolid.cli import EXIT_MEMORY, EXIT_NO_DEVICE, EXIT_USAGE, main
 from clsolid.volumeio import load_volume
 
@@ -25,6 +26,9 @@ def test_synth_writes_volume_sidecar_preview_and_track(tmp_path, capsys, device)
     assert meta["versions"]["clsolid"] and meta["device"]
     assert len(meta["timings"]["scales"]) == 2 and meta["timings"]["scales"][0]["sweep_seconds"]
     assert (tmp_path / "p.png").stat().st_size > 100
+    from clsolid.report import load_exemplar
+    np.testing.assert_array_equal(load_exemplar(tmp_path / "v_exemplar.tif"), quantise(builtin_exemplar("brick"), 8))
+    assert meta["quantised_exemplar"].endswith("v_exemplar.tif")
     track = json.loads((tmp_path / "t.json").read_text())
     assert len(track["records"]) == sum(s["sweeps"] for s in meta["timings"]["scales"])
     assert {"autocorrelation_front", "histogram_kl_right"} <= set(track["records"][0]["indicators"])
