@@ -20,14 +20,6 @@ _ML_OPTIONS = ("xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch")
 
 
-def level_values(image: np.ndarray, levels: int | None) -> np.ndarray:
-    """Grey value (input units) at the centre of each quantisation bin of :func:`quantise`."""
-    if levels is None:
-        return np.arange(256, dtype=np.float64)
-    lo, hi = float(np.min(image)), float(np.max(image))
-    return lo + (np.arange(levels) + 0.5) * (hi - lo) / levels
-
-
 def make_backend(device, backend_options: dict):
     """The reference back end for ``device="reference"``, else an OpenCL one."""
     if isinstance(device, str) and device.lower() == "reference":
@@ -136,7 +128,7 @@ def synthesize(
         No OpenCL device; buffers too large for the device (checked before allocating);
         a kernel failed to build.
     """
-    from .exemplar import load_exemplar, quantise
+    from .exemplar import level_values, load_exemplar, quantise
 
     if method not in METHODS:
         planned = f" ({', '.join(PLANNED_METHODS)} are planned, not implemented yet)" if method in PLANNED_METHODS else ""

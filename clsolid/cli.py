@@ -55,7 +55,7 @@ def _add_synth(sub) -> None:
     p.add_argument("--inherited", choices=INHERITED, default="resynthesize",
                    help="voxels from the coarser scale: re-synthesised with t=0, or fixed (default resynthesize)")
     p.add_argument("--insert-slices", type=int, default=None,
-                   help="exemplar slices inserted per constrained view, trusted (+in); 0 = noise only (-in)")
+                   help="exemplar slices inserted per constrained view, trusted (+in; default 4); 0 = noise only (-in)")
     p.add_argument("--initial-temperature", type=float, default=1.0,
                    help="temperature of non-trusted voxels at the start of a scale (default 1, the thesis)")
     p.add_argument("--bandwidth", type=float, nargs="+", default=None,
@@ -121,15 +121,7 @@ def versions() -> dict:
             "python": platform.python_version(), "platform": platform.platform()}
 
 
-def _bandwidth(args) -> tuple[float, ...] | None:
-    if args.bandwidth_factor is None:
-        return tuple(args.bandwidth) if args.bandwidth else None
-    if args.bandwidth:
-        raise InputError("give --bandwidth or --bandwidth-factor, not both")
-    return ("factor", args.bandwidth_factor)
-
-
-def _tracker(path: Path, exemplar_holder: dict, records: list):
+def _tracker(exemplar_holder: dict, records: list):
     """A progress hook that evaluates the block after every sweep (``--track``)."""
     from . import metrics
 
@@ -168,18 +160,17 @@ def cmd_synth(args) -> int:
                    initial_temperature=args.initial_temperature, builtin_size=args.builtin_size)
     if args.insert_slices is not None:
         options["insert_slices"] = args.insert_slices
-    bw = _bandwidth(args)
-    if bw is not None and bw[0] == "factor":
-        options["bandwidth_factor"] = bw[1]
-    elif bw is not None:
-        options["bandwidth"] = bw
+    if args.bandwidth is not None:
+        options["bandwidth"] = tuple(args.bandwidth)
+    if args.bandwidth_factor is not None:
+        options["bandwidth_factor"] = args.bandwidth_factor
     hooks = [] if args.quiet else [render_progress]
     records: list = []
     holder: dict = {}
     if args.track is not None:
         holder["levels"] = 256 if args.levels is None else args.levels
         holder["exemplar"] = quantise(load_exemplar(args.exemplar, builtin_size=args.builtin_size), args.levels)
-        hooks.append(_tracker(args.track, holder, records))
+        hooks.append(_tracker(holder, records))
     result = synthesize(args.exemplar, tuple(args.shape), method=args.method, heuristic=args.heuristic,
                         neighborhood=args.neighborhood, scales=args.scales, views=args.views,
                         levels=args.levels, rng=args.seed, device=args.device,

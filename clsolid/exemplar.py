@@ -278,3 +278,14 @@ def quantise(image: np.ndarray, levels: int | None = 32) -> np.ndarray:
         return np.zeros(image.shape, dtype=np.int32)
     labels = _scaled_floor(image, lo, hi, levels)
     return np.clip(labels, 0, levels - 1).astype(np.int32)
+
+
+def level_values(image: np.ndarray, levels: int | None) -> np.ndarray:
+    """Grey value, in *image*'s units, at the centre of each bin of :func:`quantise`.
+
+    ``level_values(image, levels)[quantise(image, levels)]`` maps labels back to grey values.
+    """
+    if levels is None:
+        return np.arange(256, dtype=np.float64)
+    lo, hi = float(np.min(image)), float(np.max(image))
+    return lo + (np.arange(levels) + 0.5) * (hi - lo) / levels

@@ -137,3 +137,13 @@ def test_rng_generator_and_none():
     assert a.seed != b.seed
     with pytest.raises(InputError, match="rng"):
         clsolid.synthesize(ex, (4, 4, 4), device="reference", rng=-1, **SMALL)
+
+
+def test_grey_maps_levels_back_to_input_units():
+    from clsolid.exemplar import level_values, quantise
+
+    img = np.linspace(10.0, 250.0, 400).reshape(20, 20)
+    labels = quantise(img, 16)
+    back = level_values(img, 16)[labels]
+    assert np.abs(back - img).max() <= (250 - 10) / 16 / 2 + 1e-9  # within half a bin
+    assert level_values(img, None).tolist() == list(range(256))
