@@ -157,6 +157,9 @@ def start_state(model: ScaleModel, base: np.ndarray, inserted: np.ndarray, coars
     return vol, temp
 
 
+_MIN_TIMED_SWEEP = 0.5  # seconds; shorter sweeps do not predict the finer scales
+
+
 class _Clock:
     """Per-sweep timing and a rough estimate of the time left."""
 
@@ -180,6 +183,10 @@ class _Clock:
         else:
             left_here = min(sweeps_left, math.ceil(math.log(target / t) / math.log(ratio)))
         here = sweep_s * left_here
+        if i + 1 == len(self.work):
+            return float(here)
+        if sweep_s < _MIN_TIMED_SWEEP:
+            return math.nan  # launch overhead dominates tiny sweeps: their rate would mislead
         # A finer scale relaxes about as many voxel-visits per voxel as the coarsest did.
         later = sum(self.work[i + 1 :]) * self.rate * 2.5
         return float(here + later)
