@@ -6,7 +6,7 @@ import numpy as np
 
 from . import _kernels
 from .device import Device
-from .errors import DeviceMemoryError
+from .errors import DeviceMemoryError, InputError
 from .ml_model import ScaleModel
 from .params import MLParams
 from .philox import TAG_INIT, seed_key
@@ -55,6 +55,13 @@ class CLBackend:
 
     def __init__(self, device: Device, *, vector_width: int = 16, voxels_per_item: int = 4,
                  local_size: int = 16, max_batch: int = 32768):
+        for name, value, allowed in (("vector_width", vector_width, (4, 8, 16)),
+                                     ("voxels_per_item", voxels_per_item, (1, 2, 4, 8))):
+            if value not in allowed:  # the kernel is written for exactly these
+                raise InputError(f"{name}={value!r} must be one of {allowed}")
+        for name, value in (("local_size", local_size), ("max_batch", max_batch)):
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise InputError(f"{name}={value!r} must be a positive integer")
         self.device = device
         self.vw, self.vb, self.local, self.max_batch = vector_width, voxels_per_item, local_size, max_batch
         self.name = device.name

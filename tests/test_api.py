@@ -147,3 +147,10 @@ def test_grey_maps_levels_back_to_input_units():
     back = level_values(img, 16)[labels]
     assert np.abs(back - img).max() <= (250 - 10) / 16 / 2 + 1e-9  # within half a bin
     assert level_values(img, None).tolist() == list(range(256))
+
+
+@pytest.mark.parametrize("option, value", [("voxels_per_item", 3), ("vector_width", 32), ("local_size", 0),
+                                           ("max_batch", -5)])
+def test_bad_tuning_options(device, option, value):
+    with pytest.raises(InputError, match=option):
+        clsolid.synthesize("brick", (8, 8, 8), device=device, **SMALL, **{option: value})
