@@ -16,6 +16,12 @@ from .philox import TAG_INIT, bounded, voxel_uint32
 
 _CHUNK = 128  # voxels per vectorised step, to bound memory
 
+#: Scores within TIE_TOL * max(1, |best|) of the best are ties; the lowest label (or the
+#: earlier view) wins. Exact ties are common: two views each dominated by one exemplar
+#: site, centred on levels a and b, tie at (a + b) / 2 under the product. The kernels use
+#: the same rule, so float32 and float64 break them alike.
+TIE_TOL = 1e-4
+
 
 def logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
     m = np.max(a, axis=axis, keepdims=True)
@@ -47,19 +53,27 @@ def normalise(logf: np.ndarray) -> np.ndarray:
     return logf - logsumexp(logf, axis=1)[:, None]
 
 
+def first_best(score: np.ndarray) -> np.ndarray:
+    """Index of the first score within the tie tolerance of the maximum, along the last axis."""
+    best = score.max(axis=-1, keepdims=True)
+    return np.argmax(score >= best - TIE_TOL * np.maximum(1.0, np.abs(best)), axis=-1)
+
+
 def decide(code: int, logl: np.ndarray, labels: np.ndarray) -> np.ndarray:
     """Apply a heuristic to normalised per-view log LCPDFs ``(views, m, L)``; ties -> lowest."""
-    if code == 0:  # h2-product
-        return labels[np.argmax(logl.sum(axis=0), axis=1)]
-    if code == 1:  # h2-min
-        return labels[np.argmax(logl.min(axis=0), axis=1)]
-    if code == 2:  # h2-max
-        return labels[np.argmax(logl.max(axis=0), axis=1)]
-    best = np.argmax(logl, axis=2)  # (views, m)
-    value = np.take_along_axis(logl, best[:, :, None], axis=2)[:, :, 0]
+    if code <= 2:  # h2-product, h2-min, h2-max
+        combine = (np.sum, np.min, np.max)[code]
+        return labels[first_best(combine(logl, axis=0))]
+    best = first_best(logl)  # (views, m)
     if code == 5:  # h1-mean, rounded half up to a whole grey level
         return np.floor(labels[best].mean(axis=0) + 0.5)
-    pick = np.argmin(value, axis=0) if code == 3 else np.argmax(value, axis=0)
+    value = np.take_along_axis(logl, best[:, :, None], axis=2)[:, :, 0]
+    pick = np.zeros(best.shape[1], dtype=int)
+    chosen = value[0].copy()
+    for v in range(1, value.shape[0]):  # a near-tie between views keeps the earlier view
+        tol = TIE_TOL * np.maximum(1.0, np.abs(chosen))
+        better = value[v] < chosen - tol if code == 3 else value[v] > chosen + tol
+        pick[better], chosen[better] = v, value[v][better]
     return labels[best[pick, np.arange(best.shape[1])]]
 
 

@@ -25,6 +25,23 @@ typedef CAT(int, VW) intv;
 /* Far below any term that can matter: exp of it is 0 in float32. */
 #define NEGLIGIBLE (-87.0f)
 
+/* Scores within TIE_TOL * max(1, |best|) of the best are ties, and the lowest label wins.
+ * Exact ties are common (two one-site views centred on levels a and b tie at (a+b)/2);
+ * without a tolerance float32 and float64 would break them differently. Must equal
+ * clsolid.reference.TIE_TOL. */
+#define TIE_TOL 1e-4f
+
+/* First index whose score is within the tie tolerance of the maximum. */
+inline int first_best(const float *score, int n)
+{
+    float best = score[0];
+    for (int l = 1; l < n; ++l) best = fmax(best, score[l]);
+    float cut = best - TIE_TOL * fmax(1.0f, fabs(best));
+    int l = 0;
+    while (score[l] < cut) ++l;
+    return l;
+}
+
 inline float hmin(floatv v)
 {
 #if VW == 16
@@ -236,7 +253,7 @@ inline void view_logf(__global const float *ls, int n_groups, __global const flo
 /* One ICM decision per voxel from its views' group sums, then the temperature update
  *   t = max(0, (xi + sum_r t_r) / |N|) over the union of the views' neighbourhoods.
  * A voxel whose temperature is 0 when visited is an inherited voxel being re-synthesised:
- * its value may change but its temperature stays 0. Ties go to the lowest label.
+ * its value may change but its temperature stays 0. Ties (see TIE_TOL) go to the lowest label.
  * heuristic: 0 h2-product, 1 h2-min, 2 h2-max, 3 h1-lowest, 4 h1-highest, 5 h1-mean.
  */
 __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, int X,
@@ -268,21 +285,16 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
             }
             comb[j] = c;
         }
-        const float *cs = (const float *)comb;
-        int best = 0;
-        for (int l = 1; l < n_labels; ++l)
-            if (cs[l] > cs[best]) best = l;
-        value = labels[best];
+        value = labels[first_best((const float *)comb, n_labels)];
     } else {
         float chosen = 0.0f, chosen_p = 0.0f, mean = 0.0f;
         for (int v = 0; v < n_views; ++v) {
             const float *fs = (const float *)fv[v];
-            int best = 0;
-            for (int l = 1; l < n_labels; ++l)
-                if (fs[l] > fs[best]) best = l;
-            float p = fs[best];
+            int best = first_best(fs, n_labels);
+            float p = fs[best], tol = TIE_TOL * fmax(1.0f, fabs(chosen_p));
             mean += labels[best];
-            if (v == 0 || (heuristic == 3 && p < chosen_p) || (heuristic == 4 && p > chosen_p)) {
+            /* between views, too, a near-tie keeps the earlier view */
+            if (v == 0 || (heuristic == 3 && p < chosen_p - tol) || (heuristic == 4 && p > chosen_p + tol)) {
                 chosen = labels[best];
                 chosen_p = p;
             }

@@ -98,3 +98,28 @@ def test_8_of_8_upsampling_copies_into_all_children(small_labels):
     blocks = fine.reshape(4, 2, 4, 2, 4, 2)
     assert (blocks == blocks[:, :1, :, :1, :, :1]).all()
     assert (temp[::2, ::2, ::2] == 0).all() and temp.sum() == temp.size * 7 / 8
+
+
+def test_exact_ties_go_to_the_lowest_label():
+    from clsolid.reference import decide
+
+    labels = np.arange(5.0)
+    lam = np.arange(5.0)
+    # two views, each one Gaussian bump: centred on 2 and on 1 -> product peaks at 1.5
+    logl = np.stack([-(lam - 2) ** 2, -(lam - 1) ** 2])[:, None, :] * 0.3
+    assert decide(0, logl, labels).tolist() == [1.0]
+    logl[1, 0, 2] += 5e-5  # below the tolerance: still a tie
+    assert decide(0, logl, labels).tolist() == [1.0]
+    logl[1, 0, 2] += 1e-2  # a real difference wins
+    assert decide(0, logl, labels).tolist() == [2.0]
+
+
+def test_large_window_whole_run_matches_reference(device, brick_labels):
+    """13x13 (beyond the thesis's 11x11), where one-site views create many exact ties."""
+    from clsolid.exemplar import quantise
+
+    ex = quantise(brick_labels[:40, :40], 16)
+    params = MLParams(neighborhood=13, scales=1)
+    ref = run_ml(ex, (12, 12, 12), params, 1, ReferenceBackend())[0]
+    got = run_ml(ex, (12, 12, 12), params, 1, CLBackend(device))[0]
+    assert np.mean(ref == got) >= 0.99
