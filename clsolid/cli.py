@@ -121,19 +121,18 @@ def versions() -> dict:
             "python": platform.python_version(), "platform": platform.platform()}
 
 
-def _tracker(exemplar_holder: dict, records: list):
+def _tracker(levels: int, records: list):
     """A progress hook that evaluates the block after every sweep (``--track``)."""
     from . import metrics
 
     def track(info) -> None:
-        vol = info.volume().astype(float)
-        ex = exemplar_holder["exemplar"][:: 2 ** (info.n_scales - info.scale), :: 2 ** (info.n_scales - info.scale)]
+        vol = info.volume()
         ind = {}
         for view in ("front", "right"):
             sl = metrics.view_slices(vol, view, max_slices=8)
-            ind[f"autocorrelation_{view}"] = float(metrics.autocorrelation_distance(ex, sl))
-            ind[f"histogram_kl_{view}"] = float(metrics.histogram_distance(ex, sl, bins=32,
-                                                                           value_range=(0, exemplar_holder["levels"])))
+            ind[f"autocorrelation_{view}"] = float(metrics.autocorrelation_distance(info.exemplar, sl))
+            ind[f"histogram_kl_{view}"] = float(metrics.histogram_distance(
+                info.exemplar, sl, bins=levels, value_range=(0, levels)))
         records.append({"scale": info.scale, "sweep": info.sweep, "temperature": info.temperature,
                         "elapsed": info.elapsed, "indicators": ind})
 
@@ -142,7 +141,6 @@ def _tracker(exemplar_holder: dict, records: list):
 
 def cmd_synth(args) -> int:
     from .api import synthesize
-    from .exemplar import load_exemplar, quantise
     from .volumeio import save_preview, save_volume
 
     suffix = args.output.suffix.lower()
@@ -166,11 +164,8 @@ def cmd_synth(args) -> int:
         options["bandwidth_factor"] = args.bandwidth_factor
     hooks = [] if args.quiet else [render_progress]
     records: list = []
-    holder: dict = {}
     if args.track is not None:
-        holder["levels"] = 256 if args.levels is None else args.levels
-        holder["exemplar"] = quantise(load_exemplar(args.exemplar, builtin_size=args.builtin_size), args.levels)
-        hooks.append(_tracker(holder, records))
+        hooks.append(_tracker(256 if args.levels is None else args.levels, records))
     result = synthesize(args.exemplar, tuple(args.shape), method=args.method, heuristic=args.heuristic,
                         neighborhood=args.neighborhood, scales=args.scales, views=args.views,
                         levels=args.levels, rng=args.seed, device=args.device,
@@ -182,7 +177,7 @@ def cmd_synth(args) -> int:
     exemplar_file = save_volume(written.with_name(f"{written.stem}_exemplar{written.suffix}"),
                                 result.exemplar[np.newaxis])
     sidecar = written.with_suffix(".json")
-    meta = {"volume": str(written), "quantised_exemplar": str(exemplar_file), "exemplar": str(args.exemplar) if not hasattr(args.exemplar, "shape") else "array",
+    meta = {"volume": str(written), "quantised_exemplar": str(exemplar_file), "exemplar": str(args.exemplar),
             "seed": result.seed, "device": result.device, "params": result.params,
             "level_values": result.level_values.tolist(), "voxel_size": voxel_size, "unit": args.unit,
             "versions": versions(), "timings": result.timings,

@@ -27,7 +27,8 @@ class SweepInfo:
     is the global temperature (sum of voxel temperatures) after the sweep and
     ``target`` the value that ends the scale. ``eta`` is an estimate in seconds of
     the time left for the whole synthesis. ``volume()`` returns a copy of the block
-    at the current scale, for evaluation during the run.
+    at the current scale, and ``exemplar`` is the quantised exemplar decimated to that
+    scale, so the two can be compared during the run.
     """
 
     scale: int
@@ -41,6 +42,7 @@ class SweepInfo:
     visited: int
     elapsed: float
     eta: float
+    exemplar: np.ndarray = field(repr=False)
     volume: Callable[[], np.ndarray] = field(repr=False)
 
 
@@ -248,7 +250,7 @@ def run_ml(
                                    max_sweeps=params.max_sweeps, temperature=t_now,
                                    initial_temperature=t_init, target=target, visited=visited,
                                    elapsed=time.perf_counter() - clock.t0, eta=eta,
-                                   volume=lambda: np.array(backend.volume(), copy=True)))
+                                   exemplar=model.exemplar, volume=lambda: np.array(backend.volume(), copy=True)))
             if done:
                 break
         coarse = np.asarray(backend.volume(), dtype=np.float64).reshape(model.shape)

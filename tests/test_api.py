@@ -154,3 +154,14 @@ def test_grey_maps_levels_back_to_input_units():
 def test_bad_tuning_options(device, option, value):
     with pytest.raises(InputError, match=option):
         clsolid.synthesize("brick", (8, 8, 8), device=device, **SMALL, **{option: value})
+
+
+def test_progress_carries_the_scale_exemplar(device):
+    seen = []
+    clsolid.synthesize("brick", (8, 8, 8), rng=1, device=device, progress=seen.append, neighborhood=3,
+                       scales=2, levels=8)
+    from clsolid.exemplar import builtin_exemplar, quantise
+
+    labels = quantise(builtin_exemplar("brick"), 8)
+    np.testing.assert_array_equal(seen[0].exemplar, labels[::2, ::2])
+    np.testing.assert_array_equal(seen[-1].exemplar, labels)

@@ -45,7 +45,7 @@ def _close(brick_labels, vol, metrics_=("autocorrelation_l2", "histogram_kl")):
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="issue 2 point 16 not met: with Silverman's bandwidth the ICM is "
-                   "mode-seeking on brick (seed 1: autocorrelation and histogram scores 0.46, 0.45)")
+                   "mode-seeking on brick (seed 1: autocorrelation 0.48, histogram 0.41)")
 def test_thesis_case_is_statistically_close(device, brick_labels):
     """Issue 2, point 16: brick 64x64 -> 64^3, 9x9, 3 scales, 1/8, re-synthesis, h2-product,
     xi=-3, 95 %, 32 levels, 2 views: both constrained views far closer than structureless volumes."""
@@ -59,11 +59,7 @@ def narrow_volume(device):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("metric", [
-    "autocorrelation_l2",
-    pytest.param("histogram_kl", marks=pytest.mark.xfail(
-        strict=True, reason="histogram score 0.32: ICM still over-uses the dominant dark level")),
-])
-def test_narrower_bandwidth_is_statistically_close(narrow_volume, brick_labels, metric):
-    """The same case with 0.3 x Silverman's bandwidth (autocorrelation score 0.13)."""
-    _close(brick_labels, narrow_volume, (metric,))
+def test_narrower_bandwidth_is_statistically_close(narrow_volume, brick_labels):
+    """The same case with 0.3 x Silverman's bandwidth meets the criterion for this seed
+    (histogram 0.24, autocorrelation 0.07-0.10; seed 2 does not: autocorrelation 0.32-0.37)."""
+    _close(brick_labels, narrow_volume)
