@@ -120,7 +120,7 @@ class CLBackend:
         n = int(np.prod(shape))
         if n * _F4 > self.device.max_alloc:
             raise DeviceMemoryError("volume", n * _F4, self.device.max_alloc)
-        k = _kernels.build(self.device, "ml.cl", {"NR": 8, "VW": 4, "VB": 1, "NGMAX": 1, "NLMAX": 1, "NVIEW": 2})
+        k = _kernels.build(self.device, "init.cl")
         out = np.empty(n, np.float32)
         buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, out.nbytes)
         key = seed_key(seed)

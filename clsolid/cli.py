@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
-from .params import HEURISTICS, INHERITED, UPSAMPLING
+from .params import HEURISTICS, INHERITED, UPSAMPLING, MLParams
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
 _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
@@ -41,27 +41,28 @@ def _add_synth(sub) -> None:
     p.add_argument("--shape", nargs=3, type=int, default=(64, 64, 64), metavar=("Z", "Y", "X"),
                    help="volume size (default 64 64 64)")
     p.add_argument("--method", default="ml", help="synthesis method (only 'ml' so far)")
-    p.add_argument("--heuristic", default="h2-product",
-                   help=f"view combination: {', '.join(HEURISTICS)} or a thesis/paper tag (default h2-product)")
-    p.add_argument("--neighborhood", type=int, default=9, help="odd window size per view (default 9)")
-    p.add_argument("--scales", type=int, default=3, help="decimation scales (default 3)")
-    p.add_argument("--views", type=int, default=2, choices=(2, 3), help="constrained views (default 2)")
-    p.add_argument("--levels", type=_levels, default=32, help="grey levels, or 'all' for 8-bit (default 32)")
-    p.add_argument("--xi", type=float, default=-3.0, help="cooling parameter xi < 0 (default -3)")
-    p.add_argument("--stop-fraction", type=float, default=0.95,
-                   help="stop a scale when the global temperature fell by this fraction (default 0.95)")
-    p.add_argument("--max-sweeps", type=int, default=30, help="most sweeps per scale (default 30)")
-    p.add_argument("--upsampling", choices=UPSAMPLING, default="1/8", help="coarse-to-fine copy (default 1/8)")
-    p.add_argument("--inherited", choices=INHERITED, default="resynthesize",
-                   help="voxels from the coarser scale: re-synthesised with t=0, or fixed (default resynthesize)")
-    p.add_argument("--insert-slices", type=int, default=None,
-                   help="exemplar slices inserted per constrained view, trusted (+in; default 4); 0 = noise only (-in)")
-    p.add_argument("--initial-temperature", type=float, default=1.0,
-                   help="temperature of non-trusted voxels at the start of a scale (default 1, the thesis)")
+    d = MLParams()  # one source for the defaults; argparse shows them with %(default)s
+    p.add_argument("--heuristic", default=d.heuristic,
+                   help=f"view combination: {', '.join(HEURISTICS)} or a thesis/paper tag (default %(default)s)")
+    p.add_argument("--neighborhood", type=int, default=d.neighborhood, help="odd window size per view (default %(default)s)")
+    p.add_argument("--scales", type=int, default=d.scales, help="decimation scales (default %(default)s)")
+    p.add_argument("--views", type=int, default=d.views, choices=(2, 3), help="constrained views (default %(default)s)")
+    p.add_argument("--levels", type=_levels, default=d.levels, help="grey levels, or 'all' for 8-bit (default %(default)s)")
+    p.add_argument("--xi", type=float, default=d.xi, help="cooling parameter xi < 0 (default %(default)s)")
+    p.add_argument("--stop-fraction", type=float, default=d.stop_fraction,
+                   help="stop a scale when the global temperature fell by this fraction (default %(default)s)")
+    p.add_argument("--max-sweeps", type=int, default=d.max_sweeps, help="most sweeps per scale (default %(default)s)")
+    p.add_argument("--upsampling", choices=UPSAMPLING, default=d.upsampling, help="coarse-to-fine copy (default %(default)s)")
+    p.add_argument("--inherited", choices=INHERITED, default=d.inherited,
+                   help="voxels from the coarser scale: re-synthesised with t=0, or fixed (default %(default)s)")
+    p.add_argument("--insert-slices", type=int, default=d.insert_slices,
+                   help="exemplar slices inserted per constrained view, trusted (+in; default %(default)s); 0 = noise only (-in)")
+    p.add_argument("--initial-temperature", type=float, default=d.initial_temperature,
+                   help="temperature of non-trusted voxels at the start of a scale (default %(default)s, the thesis)")
     p.add_argument("--bandwidth", type=float, nargs="+", default=None,
                    help="Parzen bandwidth: one value, or one per scale finest first (default: Silverman per scale)")
-    p.add_argument("--bandwidth-factor", type=float, default=None,
-                   help="multiply Silverman's bandwidth by this factor")
+    p.add_argument("--bandwidth-factor", type=float, default=d.bandwidth_factor,
+                   help="multiply Silverman's bandwidth by this factor (default %(default)s)")
     p.add_argument("--builtin-size", type=int, default=64, help="side of a built-in exemplar (default 64)")
     p.add_argument("--seed", type=int, default=None, help="random seed (default: fresh, recorded in the sidecar)")
     p.add_argument("--device", default=None,
@@ -154,14 +155,11 @@ def cmd_synth(args) -> int:
             raise InputError(f"--voxel-size takes one value or three (Z Y X), not {len(args.voxel_size)}")
         voxel_size = args.voxel_size[0] if len(args.voxel_size) == 1 else tuple(args.voxel_size)
     options = dict(xi=args.xi, stop_fraction=args.stop_fraction, max_sweeps=args.max_sweeps,
-                   upsampling=args.upsampling, inherited=args.inherited,
-                   initial_temperature=args.initial_temperature, builtin_size=args.builtin_size)
-    if args.insert_slices is not None:
-        options["insert_slices"] = args.insert_slices
+                   upsampling=args.upsampling, inherited=args.inherited, insert_slices=args.insert_slices,
+                   initial_temperature=args.initial_temperature, bandwidth_factor=args.bandwidth_factor,
+                   builtin_size=args.builtin_size)
     if args.bandwidth is not None:
         options["bandwidth"] = tuple(args.bandwidth)
-    if args.bandwidth_factor is not None:
-        options["bandwidth_factor"] = args.bandwidth_factor
     hooks = [] if args.quiet else [render_progress]
     records: list = []
     if args.track is not None:

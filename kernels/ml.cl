@@ -13,8 +13,6 @@
  *   NLMAX  largest number of labels
  *   NVIEW  number of constrained views (2 or 3)
  */
-#include <pyopencl-random123/philox.cl>
-
 #define CAT_(a, b) a##b
 #define CAT(a, b) CAT_(a, b)
 typedef CAT(float, VW) floatv;
@@ -81,21 +79,6 @@ inline int neighbour(int voxel, int Y, int X, int Z, __global const int *off)
     int z = voxel / (Y * X), rem = voxel - z * Y * X;
     int y = rem / X, x = rem - y * X;
     return (wrap(z + off[0], Z) * Y + wrap(y + off[1], Y)) * X + wrap(x + off[2], X);
-}
-
-/* Random exemplar pixels: Philox4x32-10 keyed by the seed, counter (x, y, z, tag). */
-__kernel void init_random(__global float *vol, int Z, int Y, int X,
-                          uint key0, uint key1, uint tag,
-                          __global const float *pixels, uint n_pixels)
-{
-    int i = get_global_id(0);
-    if (i >= Z * Y * X) return;
-    int z = i / (Y * X), rem = i - z * Y * X;
-    int y = rem / X, x = rem - y * X;
-    philox4x32_ctr_t c = {{(uint)x, (uint)y, (uint)z, tag}};
-    philox4x32_key_t k = {{key0, key1}};
-    philox4x32_ctr_t r = philox4x32(c, k);
-    vol[i] = pixels[mul_hi(r.v[0], n_pixels)];
 }
 
 /* Fold a vector of distances into one group's running (minimum, rescaled sum). */

@@ -20,5 +20,5 @@ def test_wheel_contains_the_kernels(tmp_path):
                     "-w", str(tmp_path), str(ROOT)], check=True)
     wheel = next(tmp_path.glob("clsolid-*.whl"))
     names = zipfile.ZipFile(wheel).namelist()
-    assert "clsolid/kernels/ml.cl" in names
+    assert {"clsolid/kernels/ml.cl", "clsolid/kernels/init.cl"} <= set(names)
     assert "clsolid/cli.py" in names
