@@ -110,9 +110,10 @@ def synthesize(
         of each constrained view at the start and trusted (t = 0), the thesis's ``+in``; default 4;
         0 gives the ``-in`` start, which collapses to the mode under ICM),
         ``initial_temperature`` (1),
-        ``bandwidth`` (Parzen h, one value or one per scale finest first; default Silverman's
-        rule per scale), ``bandwidth_factor`` (multiplies Silverman's h; 0.3 measured better
-        on brick, see the README), ``builtin_size``, and OpenCL tuning: ``vector_width``,
+        ``bandwidth`` (Parzen h, one value or one per scale finest first; default
+        ``bandwidth_factor`` x Silverman's rule per scale), ``bandwidth_factor`` (multiplies
+        Silverman's h; one value or one per scale finest first; default 0.2, where the
+        thesis uses 1: see the README, Quality), ``builtin_size``, and OpenCL tuning: ``vector_width``,
         ``voxels_per_item``, ``local_size``, ``max_batch``.
 
     Returns

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
-from .params import HEURISTICS, INHERITED, UPSAMPLING, MLParams
+from .params import DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, UPSAMPLING, MLParams
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
 _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
@@ -60,9 +60,11 @@ def _add_synth(sub) -> None:
     p.add_argument("--initial-temperature", type=float, default=d.initial_temperature,
                    help="temperature of non-trusted voxels at the start of a scale (default %(default)s, the thesis)")
     p.add_argument("--bandwidth", type=float, nargs="+", default=None,
-                   help="Parzen bandwidth: one value, or one per scale finest first (default: Silverman per scale)")
-    p.add_argument("--bandwidth-factor", type=float, default=d.bandwidth_factor,
-                   help="multiply Silverman's bandwidth by this factor (default %(default)s)")
+                   help="Parzen bandwidth: one value, or one per scale finest first "
+                        "(default: --bandwidth-factor x Silverman per scale)")
+    p.add_argument("--bandwidth-factor", type=float, nargs="+", default=None,
+                   help="multiply Silverman's bandwidth: one factor, or one per scale finest first "
+                        f"(default {DEFAULT_BANDWIDTH_FACTOR}; 1 = the thesis)")
     p.add_argument("--builtin-size", type=int, default=64, help="side of a built-in exemplar (default 64)")
     p.add_argument("--seed", type=int, default=None, help="random seed (default: fresh, recorded in the sidecar)")
     p.add_argument("--device", default=None,
@@ -156,10 +158,11 @@ def cmd_synth(args) -> int:
         voxel_size = args.voxel_size[0] if len(args.voxel_size) == 1 else tuple(args.voxel_size)
     options = dict(xi=args.xi, stop_fraction=args.stop_fraction, max_sweeps=args.max_sweeps,
                    upsampling=args.upsampling, inherited=args.inherited, insert_slices=args.insert_slices,
-                   initial_temperature=args.initial_temperature, bandwidth_factor=args.bandwidth_factor,
-                   builtin_size=args.builtin_size)
-    if args.bandwidth is not None:
-        options["bandwidth"] = tuple(args.bandwidth)
+                   initial_temperature=args.initial_temperature, builtin_size=args.builtin_size)
+    for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale
+        values = getattr(args, name)
+        if values is not None:
+            options[name] = values[0] if len(values) == 1 else tuple(values)
     hooks = [] if args.quiet else [render_progress]
     records: list = []
     if args.track is not None:

@@ -111,7 +111,8 @@ def build_scale(
     else:
         sigma = float(ex.std())
         # A constant exemplar has sigma = 0; any bandwidth gives the same (constant) result.
-        h = silverman(sigma, centres.size, params.neighborhood**2) * params.bandwidth_factor if sigma > 0 else 1.0
+        factor = params.bandwidth_factor[level]
+        h = silverman(sigma, centres.size, params.neighborhood**2) * factor if sigma > 0 else 1.0
     offsets = np.stack([view_offsets(v, half) for v in params.view_names])
     union = np.unique(offsets.reshape(-1, 3), axis=0)
     sshape = scale_shape(shape, level)

@@ -36,6 +36,10 @@ VIEW_SETS: dict[int, tuple[str, ...]] = {2: ("front", "right"), 3: ("front", "ri
 
 UPSAMPLING = ("1/8", "8/8")
 INHERITED = ("resynthesize", "fixed")
+# Silverman's h (factor 1, the thesis) is ~0.9 sigma in 81 dimensions, so ICM merges
+# neighbouring grey levels (mode-seeking). 0.2 x Silverman at every scale measured best on
+# brick over 6 seeds: histogram far closer, worst-case autocorrelation lower (README, Quality).
+DEFAULT_BANDWIDTH_FACTOR = 0.2
 
 
 def canonical_heuristic(name: str) -> str:
@@ -80,7 +84,7 @@ class MLParams:
     inherited: str = "resynthesize"
     insert_slices: int = 4
     initial_temperature: float = 1.0
-    bandwidth_factor: float = 1.0
+    bandwidth_factor: float | tuple[float, ...] | None = None
     bandwidth: tuple[float, ...] | None = field(default=None)
 
     def __post_init__(self):
@@ -104,22 +108,28 @@ class MLParams:
         t0 = self.initial_temperature
         if not (isinstance(t0, numbers.Real) and 0 < t0 <= 1):
             raise InputError(f"initial_temperature={t0!r} must be in (0, 1] (1 = no confidence, the thesis)")
-        f = self.bandwidth_factor
-        if not (isinstance(f, numbers.Real) and math.isfinite(f) and f > 0):
-            raise InputError(f"bandwidth_factor={f!r} must be a positive number")
+        if self.bandwidth is not None and self.bandwidth_factor is not None:
+            raise InputError("give bandwidth or bandwidth_factor, not both")
         if self.bandwidth is not None:
-            if f != 1.0:
-                raise InputError("give bandwidth or bandwidth_factor, not both")
-            bw = self.bandwidth
-            bw = (bw,) * self.scales if isinstance(bw, numbers.Real) else tuple(bw)
-            if len(bw) != self.scales or not all(
-                isinstance(b, numbers.Real) and math.isfinite(b) and b > 0 for b in bw
-            ):
-                raise InputError(
-                    f"bandwidth={self.bandwidth!r} must be a positive number or one per scale "
-                    f"({self.scales} values, finest first)"
-                )
-            object.__setattr__(self, "bandwidth", tuple(float(b) for b in bw))
+            object.__setattr__(self, "bandwidth", self._per_scale("bandwidth", self.bandwidth))
+        elif self.bandwidth_factor is not None:
+            object.__setattr__(self, "bandwidth_factor", self._per_scale("bandwidth_factor", self.bandwidth_factor))
+        else:
+            object.__setattr__(self, "bandwidth_factor", (DEFAULT_BANDWIDTH_FACTOR,) * self.scales)
+
+    def _per_scale(self, name: str, value) -> tuple[float, ...]:
+        """One positive number for every scale, or one per scale (finest first)."""
+        values = (value,) * self.scales if isinstance(value, numbers.Real) else value
+        try:
+            values = tuple(values)
+        except TypeError:
+            values = ()
+        if len(values) != self.scales or not all(
+            isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and v > 0 for v in values
+        ):
+            raise InputError(f"{name}={value!r} must be a positive number or one per scale "
+                             f"({self.scales} values, finest first)")
+        return tuple(float(v) for v in values)
 
     @property
     def view_names(self) -> tuple[str, ...]:

@@ -33,11 +33,32 @@ def test_both_tag_sets_are_aliases(name, canonical):
     (dict(heuristic="best"), "heuristic"), (dict(xi=1.0), "xi"), (dict(stop_fraction=0), "stop_fraction"),
     (dict(upsampling="2/8"), "upsampling"), (dict(inherited="maybe"), "inherited"),
     (dict(bandwidth=(1.0,)), "bandwidth"), (dict(bandwidth_factor=-1), "bandwidth_factor"),
+    (dict(bandwidth=2.0, bandwidth_factor=1.0), "not both"), (dict(bandwidth_factor=(1.0, 0.5)), "bandwidth_factor"),
+    (dict(bandwidth_factor=True), "bandwidth_factor"), (dict(bandwidth_factor="0.2"), "bandwidth_factor"),
     (dict(initial_temperature=0), "initial_temperature"),
 ])
 def test_bad_parameters_name_themselves(kwargs, word):
     with pytest.raises(InputError, match=word):
         MLParams(**kwargs)
+
+
+def test_bandwidth_is_a_fraction_of_silverman_per_scale(brick_labels):
+    """Silverman (sigma and site count of each scale, d = k^2) times the factor of the scale:
+    0.2 by default, 1 = the thesis."""
+    from clsolid.ml_model import build_scale, silverman
+
+    cases = (((0.2, 0.2, 0.2), MLParams()), ((1.0, 1.0, 1.0), MLParams(bandwidth_factor=1)),
+             ((0.5, 0.3, 2.0), MLParams(bandwidth_factor=[0.5, 0.3, 2])))
+    for factors, params in cases:
+        assert params.bandwidth_factor == factors
+        for level in range(3):
+            ex = brick_labels[:: 2**level, :: 2**level]
+            n = (ex.shape[0] - 8) * (ex.shape[1] - 8)
+            h = build_scale(brick_labels, (16, 16, 16), params, level).bandwidth
+            assert h == pytest.approx(factors[level] * silverman(float(ex.std()), n, 81), rel=1e-12)
+    fixed = MLParams(bandwidth=2.0)
+    assert fixed.bandwidth == (2.0, 2.0, 2.0) and fixed.bandwidth_factor is None
+    assert MLParams(scales=1).bandwidth_factor == (0.2,)
 
 
 @pytest.mark.parametrize("exemplar, shape, word", [

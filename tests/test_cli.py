@@ -42,6 +42,20 @@ def test_same_seed_same_file(tmp_path, device):
     np.testing.assert_array_equal(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
 
 
+@pytest.mark.parametrize("argv, key, expected", [
+    ([], "bandwidth_factor", [0.2, 0.2]),
+    (["--bandwidth-factor", "0.5"], "bandwidth_factor", [0.5, 0.5]),
+    (["--bandwidth-factor", "0.3", "2"], "bandwidth_factor", [0.3, 2.0]),
+    (["--bandwidth", "3"], "bandwidth", [3.0, 3.0]),
+])
+def test_bandwidth_options_reach_the_sidecar(tmp_path, device, argv, key, expected):
+    assert main(["synth", "-o", str(tmp_path / "v.npy"), *FAST, "-q", *argv]) == 0
+    params = json.loads((tmp_path / "v.json").read_text())["params"]
+    assert params[key] == pytest.approx(expected)
+    if key == "bandwidth":
+        assert params["bandwidth_effective"] == pytest.approx(expected)
+
+
 def test_quiet_is_quiet(tmp_path, capsys, device):
     assert main(["synth", "-o", str(tmp_path / "v.npy"), *FAST, "-q"]) == 0
     assert capsys.readouterr().err == ""
@@ -50,6 +64,8 @@ def test_quiet_is_quiet(tmp_path, capsys, device):
 @pytest.mark.parametrize("argv, code, words", [
     (["--levels", "1"], EXIT_USAGE, "levels"),
     (["--neighborhood", "4"], EXIT_USAGE, "neighborhood"),
+    (["--bandwidth-factor", "0.5", "1", "1", "1"], EXIT_USAGE, "bandwidth_factor"),
+    (["--bandwidth", "2", "--bandwidth-factor", "0.5"], EXIT_USAGE, "not both"),
     (["--device", "no-such-device-anywhere"], EXIT_NO_DEVICE, "no OpenCL device matches"),
 ])
 def test_user_errors_get_exit_codes_and_no_traceback(tmp_path, capsys, argv, code, words, device):

@@ -32,34 +32,56 @@ def test_default_settings_beat_no_structure(device, brick_labels):
         assert hist < s["noise_hist"], f"{view}: histogram KL {hist:.3f} vs noise {s['noise_hist']:.3f}"
 
 
-def _close(brick_labels, vol, metrics_=("autocorrelation_l2", "histogram_kl")):
+def _scores_of(brick_labels, vol) -> dict[tuple[str, str], float]:
     """Calibrated scores: 0 = as close as two halves of the exemplar, 1 = no structure
-    (shuffled pixels; uniform noise for the histogram). "Far closer than no structure" is
-    read as a score below 0.3 on both constrained views."""
+    (shuffled pixels; uniform noise for the histogram)."""
     report = metrics.evaluate(brick_labels, vol, views=("front", "right"), reference_repeats=3)
-    scores = {(r["view"], r["metric"]): r["score"] for r in report["summary"]}
-    for view in ("front", "right"):
-        for metric in metrics_:
-            assert scores[view, metric] < 0.3, f"{view} {metric}: score {scores[view, metric]:.2f}"
+    return {(r["view"], r["metric"]): r["score"] for r in report["summary"]}
 
 
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="issue 2 point 16 not met: with Silverman's bandwidth the ICM is "
-                   "mode-seeking on brick (seed 1: autocorrelation 0.48, histogram 0.41)")
-def test_thesis_case_is_statistically_close(device, brick_labels):
-    """Issue 2, point 16: brick 64x64 -> 64^3, 9x9, 3 scales, 1/8, re-synthesis, h2-product,
-    xi=-3, 95 %, 32 levels, 2 views: both constrained views far closer than structureless volumes."""
-    _close(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device))
+# Issue 2, point 16: brick 64x64 -> 64^3, 9x9, 3 scales, 1/8, re-synthesis, h2-product,
+# xi=-3, 95 %, 32 levels, 2 views. "Far closer than no structure" is read as a calibrated
+# score below 0.3 on both constrained views.
+SEEDS = (1, 2, 3)
 
 
 @pytest.fixture(scope="module")
-def narrow_volume(device):
-    """The thesis case at 0.3 x Silverman's bandwidth, grown once per device."""
-    return clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device, bandwidth_factor=0.3)
+def default_scores(device, brick_labels):
+    """The thesis case with clsolid's defaults (0.2 x Silverman), grown once per seed."""
+    return {seed: _scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=seed, device=device))
+            for seed in SEEDS}
+
+
+def _assert_every_seed_below(scores: dict, metric: str, limit: float) -> None:
+    bad = {(seed, view): round(s[view, metric], 2) for seed, s in scores.items()
+           for view in ("front", "right") if not s[view, metric] < limit}
+    assert not bad, f"{metric} score >= {limit} for (seed, view): {bad}"
 
 
 @pytest.mark.slow
-def test_narrower_bandwidth_is_statistically_close(narrow_volume, brick_labels):
-    """The same case with 0.3 x Silverman's bandwidth meets the criterion for this seed
-    (histogram 0.24, autocorrelation 0.07-0.10; seed 2 does not: autocorrelation 0.32-0.37)."""
-    _close(brick_labels, narrow_volume)
+def test_thesis_case_histogram_is_close_for_every_seed(default_scores):
+    _assert_every_seed_below(default_scores, "histogram_kl", 0.3)
+
+
+@pytest.mark.slow
+def test_thesis_case_autocorrelation_is_far_from_shuffled(default_scores):
+    """Every seed and view at most halfway from the exemplar's own floor to shuffled pixels."""
+    _assert_every_seed_below(default_scores, "autocorrelation_l2", 0.5)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="issue 2 point 16 not met for every seed: the bricks lack their joints, "
+                   "autocorrelation scores 0.21-0.38 over seeds 1-6 (seed 3: 0.36/0.34)")
+def test_thesis_case_autocorrelation_is_close_for_every_seed(default_scores):
+    _assert_every_seed_below(default_scores, "autocorrelation_l2", 0.3)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="with the thesis's Silverman bandwidth the ICM is mode-seeking on brick: "
+                   "two dark levels merge (seed 1: histogram 0.41, autocorrelation 0.48)")
+def test_thesis_bandwidth_is_statistically_close(device, brick_labels):
+    s = _scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device,
+                                                    bandwidth_factor=1.0))
+    for view in ("front", "right"):
+        for metric in ("autocorrelation_l2", "histogram_kl"):
+            assert s[view, metric] < 0.3, f"{view} {metric}: score {s[view, metric]:.2f}"

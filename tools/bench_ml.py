@@ -37,9 +37,9 @@ def matmul_gflops(n: int = 2048, repeats: int = 5) -> float:
     return 2 * n**3 / best / 1e9
 
 
-def kernel_rate(device, labels, shape, k: int, repeats: int = 3) -> tuple[float, float]:
+def kernel_rate(device, labels, shape, k: int, factor: float | None, repeats: int = 3) -> tuple[float, float]:
     """Terms/s of the Parzen kernel alone on one batch of full-resolution voxels (warm)."""
-    params = MLParams(neighborhood=k, scales=1)
+    params = MLParams(neighborhood=k, scales=1, bandwidth_factor=factor)
     model = build_scale(labels, shape, params, 0)
     rng = np.random.default_rng(0)
     vol = rng.choice(model.labels, size=model.shape)
@@ -56,9 +56,9 @@ def kernel_rate(device, labels, shape, k: int, repeats: int = 3) -> tuple[float,
     return terms / best, best
 
 
-def run_case(device, labels, shape, k: int, seed: int) -> dict:
+def run_case(device, labels, shape, k: int, seed: int, factor: float | None) -> dict:
     r = clsolid.synthesize(labels.astype(np.uint16), shape, neighborhood=k, levels=32, rng=seed,
-                           device=device, full_output=True, voxels_per_item=8)
+                           device=device, full_output=True, voxels_per_item=8, bandwidth_factor=factor)
     return r.timings
 
 
@@ -68,6 +68,8 @@ def main(argv=None) -> None:
     ap.add_argument("--shape", nargs=3, type=int, default=(64, 64, 64))
     ap.add_argument("--device", default=None)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--bandwidth-factor", type=float, default=None,
+                    help=f"times Silverman's h (default {MLParams().bandwidth_factor[0]}; 1 = the thesis)")
     args = ap.parse_args(argv)
     device = clsolid.select_device(args.device)
     labels = quantise(builtin_exemplar("brick"), 32)
@@ -77,13 +79,14 @@ def main(argv=None) -> None:
     print(f"reference: NumPy float32 matmul {ref:.1f} GFLOP/s (best of 5, 2048^2)")
     for case in (["a", "b"] if args.case == "both" else [args.case]):
         title, k = CASES[case]
-        rate, dt = kernel_rate(device, labels, shape, k)
+        rate, dt = kernel_rate(device, labels, shape, k, args.bandwidth_factor)
         gflops = 3 * rate / 1e9
         print(f"\n== case ({case}) {title}: brick 64x64, 32 levels -> {shape}, 3 scales, 1/8, "
-              f"re-synthesis, h2-product, xi=-3, 95%, 2 views, {MLParams().insert_slices} trusted +in slices")
+              f"re-synthesis, h2-product, xi=-3, 95%, 2 views, {MLParams().insert_slices} trusted +in slices, "
+              f"{MLParams(bandwidth_factor=args.bandwidth_factor).bandwidth_factor[0]:g} x Silverman")
         print(f"Parzen kernel: {rate / 1e9:.2f} G terms/s = {gflops:.1f} GFLOP/s at 3 flops/term "
               f"= {100 * gflops / ref:.0f}% of matmul ({dt * 1e3:.0f} ms for 8192 voxels x 2 views)")
-        timings = run_case(device, labels, shape, k, args.seed)
+        timings = run_case(device, labels, shape, k, args.seed, args.bandwidth_factor)
         for s in timings["scales"]:
             sweeps = " ".join(f"{t:.2f}" for t in s["sweep_seconds"])
             print(f"  scale {'x'.join(map(str, s['shape']))}: {s['sweeps']} sweeps, {s['seconds']:.1f} s "
