@@ -49,9 +49,8 @@ def build(device: Device, name: str, defines: dict[str, int | float] | None = No
     source = read_source(name)
     # -w: PoCL on AVX2 CPUs notes that float16 arguments change the ABI, once per call
     # site, and prints "N warnings generated." on every run; nothing there is actionable.
-    options = tuple(include_options()) + ("-w",) + tuple(
-        f"-D{k}={v}" for k, v in sorted((defines or {}).items())
-    )
+    macros = tuple(f"-D{k}={v}" for k, v in sorted((defines or {}).items()))
+    options = tuple(include_options()) + ("-w",) + macros
     key = (source, options)
     cached = device.programs.get(key)
     if cached is not None:
@@ -60,7 +59,7 @@ def build(device: Device, name: str, defines: dict[str, int | float] | None = No
         program = cl.Program(device.context, source).build(options=list(options))
     except cl.RuntimeError as exc:
         raise KernelBuildError(
-            f"building kernels/{name} with {' '.join(options[3:]) or 'no options'} failed on "
+            f"building kernels/{name} with {' '.join(macros) or 'no defines'} failed on "
             f"{device.name}:\n{exc}"
         ) from exc
     kernels = {k.function_name: k for k in program.all_kernels()}

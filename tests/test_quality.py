@@ -80,8 +80,7 @@ def test_thesis_case_autocorrelation_is_close_for_every_seed(default_scores):
 @pytest.mark.xfail(strict=True, reason="with the thesis's Silverman bandwidth the ICM is mode-seeking on brick: "
                    "two dark levels merge (seed 1: histogram 0.41, autocorrelation 0.48)")
 def test_thesis_bandwidth_is_statistically_close(device, brick_labels):
-    s = _scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device,
-                                                    bandwidth_factor=1.0))
-    for view in ("front", "right"):
-        for metric in ("autocorrelation_l2", "histogram_kl"):
-            assert s[view, metric] < 0.3, f"{view} {metric}: score {s[view, metric]:.2f}"
+    scores = {1: _scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device,
+                                                             bandwidth_factor=1.0))}
+    for metric in ("autocorrelation_l2", "histogram_kl"):
+        _assert_every_seed_below(scores, metric, 0.3)

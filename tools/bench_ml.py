@@ -20,7 +20,7 @@ import clsolid
 from clsolid.cl_backend import CLBackend
 from clsolid.exemplar import builtin_exemplar, quantise
 from clsolid.ml_model import build_scale
-from clsolid.params import MLParams
+from clsolid.params import DEFAULT_BANDWIDTH_FACTOR, MLParams
 
 CASES = {"a": ("thesis case, 9x9", 9), "b": ("7x7 variant", 7)}
 
@@ -69,10 +69,11 @@ def main(argv=None) -> None:
     ap.add_argument("--device", default=None)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--bandwidth-factor", type=float, default=None,
-                    help=f"times Silverman's h (default {MLParams().bandwidth_factor[0]}; 1 = the thesis)")
+                    help=f"times Silverman's h (default {DEFAULT_BANDWIDTH_FACTOR}; 1 = the thesis)")
     args = ap.parse_args(argv)
     device = clsolid.select_device(args.device)
     labels = quantise(builtin_exemplar("brick"), 32)
+    factor = DEFAULT_BANDWIDTH_FACTOR if args.bandwidth_factor is None else args.bandwidth_factor
     shape = tuple(args.shape)
     ref = matmul_gflops()
     print(f"device: {device.name}")
@@ -83,7 +84,7 @@ def main(argv=None) -> None:
         gflops = 3 * rate / 1e9
         print(f"\n== case ({case}) {title}: brick 64x64, 32 levels -> {shape}, 3 scales, 1/8, "
               f"re-synthesis, h2-product, xi=-3, 95%, 2 views, {MLParams().insert_slices} trusted +in slices, "
-              f"{MLParams(bandwidth_factor=args.bandwidth_factor).bandwidth_factor[0]:g} x Silverman")
+              f"{factor:g} x Silverman")
         print(f"Parzen kernel: {rate / 1e9:.2f} G terms/s = {gflops:.1f} GFLOP/s at 3 flops/term "
               f"= {100 * gflops / ref:.0f}% of matmul ({dt * 1e3:.0f} ms for 8192 voxels x 2 views)")
         timings = run_case(device, labels, shape, k, args.seed, args.bandwidth_factor)
