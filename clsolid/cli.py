@@ -191,8 +191,9 @@ def cmd_synth(args) -> int:
         args.track.write_text(json.dumps({"exemplar": str(args.exemplar), "seed": result.seed,
                                           "records": records}, indent=2))
     if not args.quiet:
+        others = [str(p) for p in (sidecar, exemplar_file, args.preview, args.track) if p is not None]
         print(f"wrote {written} ({'x'.join(map(str, result.volume.shape))}, seed {result.seed}, "
-              f"{result.timings['total_s']:.1f}s on {result.device}), {sidecar} and {exemplar_file}",
+              f"{result.timings['total_s']:.1f}s on {result.device}), {', '.join(others[:-1])} and {others[-1]}",
               file=sys.stderr)
     return EXIT_OK
 

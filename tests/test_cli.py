@@ -34,6 +34,7 @@ def test_synth_writes_volume_sidecar_preview_and_track(tmp_path, capsys, device)
     assert {"autocorrelation_front", "histogram_kl_right"} <= set(track["records"][0]["indicators"])
     err = capsys.readouterr().err
     assert "scale 2/2" in err and "sweep" in err and "ETA" in err and "wrote" in err
+    assert "p.png" in err and "t.json" in err
 
 
 def test_same_seed_same_file(tmp_path, device):
