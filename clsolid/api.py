@@ -15,7 +15,7 @@ log = logging.getLogger(__name__)
 
 METHODS = ("ml",)
 PLANNED_METHODS = ("wl", "kopf", "chen-wang")
-_ML_OPTIONS = ("xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
+_ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
                "initial_temperature", "bandwidth", "bandwidth_factor")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch")
 
@@ -103,7 +103,9 @@ def synthesize(
     full_output : bool
         Return a :class:`SynthesisResult` (parameters, seed, timings) instead of the array.
     **options
-        ``xi`` (cooling, default -3), ``stop_fraction`` (0.95: a scale stops when the global
+        ``pyramid`` (how coarser scales' exemplars are made: ``"binomial"``, the default,
+        smooths with [1 2 1]/4 before each 2:1 decimation; ``"decimate"`` keeps every other
+        pixel unfiltered, as the thesis does: see the README, Quality), ``xi`` (cooling, default -3), ``stop_fraction`` (0.95: a scale stops when the global
         temperature has fallen by this fraction, or reaches 0), ``max_sweeps`` (30 per scale),
         ``upsampling`` (``"1/8"`` or ``"8/8"``), ``inherited`` (``"resynthesize"`` with t held
         at 0, or ``"fixed"``), ``insert_slices`` (exemplar slices tiled onto this many slices

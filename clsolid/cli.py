@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
-from .params import DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, UPSAMPLING, MLParams
+from .params import DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, UPSAMPLING, MLParams
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
 _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
@@ -46,6 +46,9 @@ def _add_synth(sub) -> None:
                    help=f"view combination: {', '.join(HEURISTICS)} or a thesis/paper tag (default %(default)s)")
     p.add_argument("--neighborhood", type=int, default=d.neighborhood, help="odd window size per view (default %(default)s)")
     p.add_argument("--scales", type=int, default=d.scales, help="decimation scales (default %(default)s)")
+    p.add_argument("--pyramid", choices=PYRAMIDS, default=d.pyramid,
+                   help="coarser exemplars: [1 2 1]/4 low-pass then 2:1 decimation, or plain decimation "
+                        "as in the thesis (default %(default)s)")
     p.add_argument("--views", type=int, default=d.views, choices=(2, 3), help="constrained views (default %(default)s)")
     p.add_argument("--levels", type=_levels, default=d.levels, help="grey levels, or 'all' for 8-bit (default %(default)s)")
     p.add_argument("--xi", type=float, default=d.xi, help="cooling parameter xi < 0 (default %(default)s)")
@@ -156,7 +159,7 @@ def cmd_synth(args) -> int:
         if len(args.voxel_size) not in (1, 3):
             raise InputError(f"--voxel-size takes one value or three (Z Y X), not {len(args.voxel_size)}")
         voxel_size = args.voxel_size[0] if len(args.voxel_size) == 1 else tuple(args.voxel_size)
-    options = dict(xi=args.xi, stop_fraction=args.stop_fraction, max_sweeps=args.max_sweeps,
+    options = dict(pyramid=args.pyramid, xi=args.xi, stop_fraction=args.stop_fraction, max_sweeps=args.max_sweeps,
                    upsampling=args.upsampling, inherited=args.inherited, insert_slices=args.insert_slices,
                    initial_temperature=args.initial_temperature, builtin_size=args.builtin_size)
     for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale

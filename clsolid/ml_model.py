@@ -58,6 +58,37 @@ def silverman(sigma: float, n: int, d: int) -> float:
     return float(sigma * (4.0 / (n * (d + 2))) ** (1.0 / (d + 4)))
 
 
+def _binomial_halve(image: np.ndarray) -> np.ndarray:
+    """Smooth with [1 2 1]/4 along both axes (edges repeated), then keep the even pixels."""
+    for axis in (0, 1):
+        p = np.moveaxis(np.pad(image, [(1, 1) if a == axis else (0, 0) for a in (0, 1)], mode="edge"), axis, 0)
+        image = np.moveaxis((p[:-2] + 2.0 * p[1:-1] + p[2:]) / 4.0, 0, axis)
+    return image[::2, ::2]
+
+
+def nearest_label(values: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Each value replaced by the closest of the sorted *labels* (the lower one on a tie)."""
+    hi = np.clip(np.searchsorted(labels, values), 1, labels.size - 1) if labels.size > 1 else np.zeros(values.shape, int)
+    lo = np.maximum(hi - 1, 0)
+    return np.where(values - labels[lo] <= labels[hi] - values, labels[lo], labels[hi])
+
+
+def scale_exemplar(labels_img: np.ndarray, level: int, pyramid: str = "binomial") -> np.ndarray:
+    """The exemplar of scale *level*, ``ceil(H / 2^level) x ceil(W / 2^level)`` (thesis_spec §2.5).
+
+    ``"decimate"`` keeps the even pixels. ``"binomial"`` smooths with [1 2 1]/4 before each
+    halving, so thin features survive as fainter ones instead of vanishing where they fall
+    on odd pixels; the result is rounded to the nearest grey level of *labels_img*, because
+    the engine only ever writes those levels.
+    """
+    if pyramid == "decimate" or level == 0:
+        return labels_img[:: 2**level, :: 2**level]
+    image = labels_img.astype(np.float64)
+    for _ in range(level):
+        image = _binomial_halve(image)
+    return nearest_label(image, np.unique(labels_img).astype(np.float64)).astype(labels_img.dtype)
+
+
 def scale_shape(shape: tuple[int, int, int], level: int) -> tuple[int, int, int]:
     """Shape of the block decimated *level* times (keeps even coordinates: ceil(N / 2^level))."""
     s = 2**level
@@ -103,8 +134,7 @@ def build_scale(
 ) -> ScaleModel:
     """Tables of scale *level* from the full-resolution exemplar labels."""
     half = params.neighborhood // 2
-    step = 2**level
-    ex = labels_img[::step, ::step]
+    ex = scale_exemplar(labels_img, level, params.pyramid)
     centres, patches = exemplar_tables(ex, half)
     if params.bandwidth is not None:
         h = params.bandwidth[level]

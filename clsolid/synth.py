@@ -116,10 +116,11 @@ def slice_depths(size: int, count: int, step: int) -> np.ndarray:
 def insert_slices(vol: np.ndarray, labels_img: np.ndarray, views: tuple[str, ...], count: int, step: int) -> np.ndarray:
     """``+in``: tile the exemplar onto *count* slices of each constrained view.
 
-    Depths are multiples of *step* = 2^(scales-1), so every scale down to the coarsest
-    keeps the slices (decimated like the exemplar). Returns the mask of inserted voxels;
-    they start each scale trusted (t = 0), like inherited voxels: under ICM a voxel at
-    t = 1 ignores its neighbours, so untrusted slices would be overwritten unseen.
+    Called at every scale with that scale's exemplar and *step* = 2^(scales-1-level):
+    the depths are the full-resolution ones halved, so each slice persists from the
+    coarsest scale down. Returns the mask of inserted voxels; they start each scale
+    trusted (t = 0), like inherited voxels: under ICM a voxel at t = 1 ignores its
+    neighbours, so untrusted slices would be overwritten unseen.
     """
     mask = np.zeros(vol.shape, bool)
     if count == 0:
@@ -143,11 +144,15 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, views: tuple[str, ...
     return mask
 
 
-def start_state(model: ScaleModel, base: np.ndarray, inserted: np.ndarray, coarse: np.ndarray | None, params: MLParams):
-    """Volume and temperatures at the start of a scale (§2.7); t = 0 marks trusted voxels."""
+def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, params: MLParams):
+    """Volume and temperatures at the start of a scale (§2.7); t = 0 marks trusted voxels.
+
+    The random start *base* (full resolution) is decimated; the coarser scale's result is
+    copied in (1/8 or 8/8), then the ``+in`` slices get this scale's exemplar.
+    """
     step = 2**model.level
     vol = base[::step, ::step, ::step].astype(np.float64)
-    temp = np.where(inserted[::step, ::step, ::step], 0.0, params.initial_temperature)
+    temp = np.full(model.shape, params.initial_temperature)
     if coarse is not None:
         if params.upsampling == "8/8":
             up = coarse.repeat(2, 0).repeat(2, 1).repeat(2, 2)
@@ -156,6 +161,9 @@ def start_state(model: ScaleModel, base: np.ndarray, inserted: np.ndarray, coars
             vol[::2, ::2, ::2] = coarse
         # Only the voxel at the even corner is inherited (t = 0), under 1/8 and 8/8 alike.
         temp[::2, ::2, ::2] = 0.0
+    inserted = insert_slices(vol, model.exemplar, params.view_names, params.insert_slices,
+                             2 ** (params.scales - 1 - model.level))
+    temp[inserted] = 0.0
     return vol, temp
 
 
@@ -212,13 +220,12 @@ def run_ml(
     backend.prepare(models)  # refuses, before allocating, what the device cannot hold
     clock = _Clock(models)
     base = backend.init_volume(shape, seed, models[0].exemplar)
-    inserted = insert_slices(base, labels_img, params.view_names, params.insert_slices, 2 ** (params.scales - 1))
     resynth = params.inherited == "resynthesize"
     coarse = None
     timings: dict = {"scales": []}
     for i, model in enumerate(models):
         t_scale = time.perf_counter()
-        vol, temp = start_state(model, base, inserted, coarse, params)
+        vol, temp = start_state(model, base, coarse, params)
         inherited = temp == 0
         backend.start_scale(model, vol, temp, params)
         t_init = float(temp.sum())

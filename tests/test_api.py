@@ -45,14 +45,14 @@ def test_bad_parameters_name_themselves(kwargs, word):
 def test_bandwidth_is_a_fraction_of_silverman_per_scale(brick_labels):
     """Silverman (sigma and site count of each scale, d = k^2) times the factor of the scale:
     0.2 by default, 1 = the thesis."""
-    from clsolid.ml_model import build_scale, silverman
+    from clsolid.ml_model import build_scale, scale_exemplar, silverman
 
     cases = (((0.2, 0.2, 0.2), MLParams()), ((1.0, 1.0, 1.0), MLParams(bandwidth_factor=1)),
              ((0.5, 0.3, 2.0), MLParams(bandwidth_factor=[0.5, 0.3, 2])))
     for factors, params in cases:
         assert params.bandwidth_factor == factors
         for level in range(3):
-            ex = brick_labels[:: 2**level, :: 2**level]
+            ex = scale_exemplar(brick_labels, level, params.pyramid)
             n = (ex.shape[0] - 8) * (ex.shape[1] - 8)
             h = build_scale(brick_labels, (16, 16, 16), params, level).bandwidth
             assert h == pytest.approx(factors[level] * silverman(float(ex.std()), n, 81), rel=1e-12)
@@ -182,7 +182,8 @@ def test_progress_carries_the_scale_exemplar(device):
     clsolid.synthesize("brick", (8, 8, 8), rng=1, device=device, progress=seen.append, neighborhood=3,
                        scales=2, levels=8)
     from clsolid.exemplar import builtin_exemplar, quantise
+    from clsolid.ml_model import scale_exemplar
 
     labels = quantise(builtin_exemplar("brick"), 8)
-    np.testing.assert_array_equal(seen[0].exemplar, labels[::2, ::2])
+    np.testing.assert_array_equal(seen[0].exemplar, scale_exemplar(labels, 1, "binomial"))
     np.testing.assert_array_equal(seen[-1].exemplar, labels)

@@ -48,11 +48,13 @@ def test_same_seed_same_file(tmp_path, device):
     (["--bandwidth-factor", "0.5"], "bandwidth_factor", [0.5, 0.5]),
     (["--bandwidth-factor", "0.3", "2"], "bandwidth_factor", [0.3, 2.0]),
     (["--bandwidth", "3"], "bandwidth", [3.0, 3.0]),
+    ([], "pyramid", "binomial"),
+    (["--pyramid", "decimate"], "pyramid", "decimate"),
 ])
-def test_bandwidth_options_reach_the_sidecar(tmp_path, device, argv, key, expected):
+def test_method_options_reach_the_sidecar(tmp_path, device, argv, key, expected):
     assert main(["synth", "-o", str(tmp_path / "v.npy"), *FAST, "-q", *argv]) == 0
     params = json.loads((tmp_path / "v.json").read_text())["params"]
-    assert params[key] == pytest.approx(expected)
+    assert params[key] == (expected if isinstance(expected, str) else pytest.approx(expected))
     if key == "bandwidth":
         assert params["bandwidth_effective"] == pytest.approx(expected)
 
@@ -74,6 +76,13 @@ def test_user_errors_get_exit_codes_and_no_traceback(tmp_path, capsys, argv, cod
     assert main(base + argv) == code
     err = capsys.readouterr().err
     assert words in err and "Traceback" not in err
+
+
+def test_bad_choice_is_a_usage_error(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:  # argparse's own exit, with its usage line
+        main(["synth", "-o", str(tmp_path / "v.npy"), "--pyramid", "gauss"])
+    assert exit_info.value.code == EXIT_USAGE
+    assert "--pyramid: invalid choice: 'gauss'" in capsys.readouterr().err
 
 
 def test_bad_output_extension(tmp_path, capsys):

@@ -41,13 +41,13 @@ def _scores_of(brick_labels, vol) -> dict[tuple[str, str], float]:
 
 # Issue 2, point 16: brick 64x64 -> 64^3, 9x9, 3 scales, 1/8, re-synthesis, h2-product,
 # xi=-3, 95 %, 32 levels, 2 views. "Far closer than no structure" is read as a calibrated
-# score below 0.3 on both constrained views.
+# score below 0.3 on both constrained views, for every seed tried.
 SEEDS = (1, 2, 3)
 
 
 @pytest.fixture(scope="module")
 def default_scores(device, brick_labels):
-    """The thesis case with clsolid's defaults (0.2 x Silverman), grown once per seed."""
+    """The thesis case with clsolid's defaults (binomial pyramid, 0.2 x Silverman), once per seed."""
     return {seed: _scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=seed, device=device))
             for seed in SEEDS}
 
@@ -59,28 +59,24 @@ def _assert_every_seed_below(scores: dict, metric: str, limit: float) -> None:
 
 
 @pytest.mark.slow
-def test_thesis_case_histogram_is_close_for_every_seed(default_scores):
-    _assert_every_seed_below(default_scores, "histogram_kl", 0.3)
+@pytest.mark.parametrize("metric", ["histogram_kl", "autocorrelation_l2"])
+def test_thesis_case_is_close_for_every_seed(default_scores, metric):
+    _assert_every_seed_below(default_scores, metric, 0.3)
 
 
 @pytest.mark.slow
-def test_thesis_case_autocorrelation_is_far_from_shuffled(default_scores):
-    """Every seed and view at most halfway from the exemplar's own floor to shuffled pixels."""
-    _assert_every_seed_below(default_scores, "autocorrelation_l2", 0.5)
-
-
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="issue 2 point 16 not met for every seed: the bricks lack their joints, "
-                   "autocorrelation scores 0.21-0.38 over seeds 1-6 (seed 3: 0.36/0.34)")
-def test_thesis_case_autocorrelation_is_close_for_every_seed(default_scores):
-    _assert_every_seed_below(default_scores, "autocorrelation_l2", 0.3)
-
-
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="with the thesis's Silverman bandwidth the ICM is mode-seeking on brick: "
-                   "two dark levels merge (seed 1: histogram 0.41, autocorrelation 0.48)")
-def test_thesis_bandwidth_is_statistically_close(device, brick_labels):
-    scores = {1: _scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device,
-                                                             bandwidth_factor=1.0))}
+def test_thesis_decimation_is_close_on_its_worst_seed(device, brick_labels):
+    """The thesis's plain decimation (§2.5) meets the criterion too; seed 3 was its worst of 1-6."""
+    scores = {3: _scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=3, device=device,
+                                                             pyramid="decimate"))}
     for metric in ("autocorrelation_l2", "histogram_kl"):
         _assert_every_seed_below(scores, metric, 0.3)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="with the thesis's Silverman bandwidth the ICM is mode-seeking on brick: two dark "
+                   "levels merge (seed 1: histogram 0.43; its autocorrelation, 0.05, is fine)")
+def test_thesis_bandwidth_keeps_the_grey_levels(device, brick_labels):
+    scores = {1: _scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device,
+                                                             bandwidth_factor=1.0))}
+    _assert_every_seed_below(scores, "histogram_kl", 0.3)

@@ -1,0 +1,88 @@
+"""The exemplar of each scale (thesis_spec §2.5) and the ``+in`` slices at every scale."""
+
+import numpy as np
+import pytest
+from scipy.ndimage import correlate1d
+
+from clsolid.errors import InputError
+from clsolid.ml_model import build_scale, scale_exemplar
+from clsolid.params import MLParams
+from clsolid.reference import ReferenceBackend
+from clsolid.synth import run_ml, slice_depths
+
+
+def _binomial_reference(labels: np.ndarray, level: int) -> np.ndarray:
+    """float64, written independently: scipy's correlate with edge repeat, then a brute-force nearest level."""
+    img = labels.astype(np.float64)
+    for _ in range(level):
+        for axis in (0, 1):
+            img = correlate1d(img, [0.25, 0.5, 0.25], axis=axis, mode="nearest")
+        img = img[::2, ::2]
+    levels = np.unique(labels).astype(np.float64)
+    return levels[np.argmin(np.abs(img[..., None] - levels), axis=-1)]  # argmin: lower level on a tie
+
+
+@pytest.mark.parametrize("shape", [(16, 16), (13, 10), (7, 21)])
+@pytest.mark.parametrize("level", [1, 2, 3])
+def test_binomial_pyramid_matches_reference(shape, level):
+    rng = np.random.default_rng(level)
+    labels = rng.choice(np.array([0, 3, 4, 9, 15]), shape).astype(np.uint8)
+    got = scale_exemplar(labels, level, "binomial")
+    assert got.shape == tuple(-(-n // 2**level) for n in shape) and got.dtype == labels.dtype
+    np.testing.assert_array_equal(got, _binomial_reference(labels, level))
+    assert set(np.unique(got)) <= set(np.unique(labels))
+
+
+def test_decimate_keeps_even_pixels_and_level_0_is_the_exemplar(brick_labels):
+    np.testing.assert_array_equal(scale_exemplar(brick_labels, 2, "decimate"), brick_labels[::4, ::4])
+    for pyramid in ("binomial", "decimate"):
+        np.testing.assert_array_equal(scale_exemplar(brick_labels, 0, pyramid), brick_labels)
+
+
+def test_thin_line_on_odd_row_survives_binomial_not_decimation():
+    """Why binomial is the default: brick's one-pixel mortar lines vanish where they fall on odd pixels."""
+    img = np.full((16, 16), 2, np.uint8)
+    img[5] = 30
+    img[15] = np.arange(0, 32, 2)  # the levels in between, as in a quantised image
+    assert (scale_exemplar(img, 1, "decimate")[:7] == 2).all()
+    rows = scale_exemplar(img, 1, "binomial")
+    assert (rows[2:4] == 8).all()  # (2 + 2*2 + 30) / 4 = 9, between levels 8 and 10: the lower
+    assert (rows[[0, 1, 4, 5, 6]] == 2).all()
+
+
+def test_build_scale_uses_the_pyramid(brick_labels):
+    for pyramid in ("binomial", "decimate"):
+        model = build_scale(brick_labels, (16, 16, 16), MLParams(scales=2, neighborhood=5, pyramid=pyramid), 1)
+        np.testing.assert_array_equal(model.exemplar, scale_exemplar(brick_labels, 1, pyramid))
+
+
+def test_unknown_pyramid_is_refused():
+    with pytest.raises(InputError, match="pyramid='gauss'"):
+        MLParams(pyramid="gauss")
+
+
+@pytest.mark.parametrize("pyramid", ["binomial", "decimate"])
+def test_inserted_slices_show_each_scale_exemplar(brick_labels, pyramid):
+    """+in: every scale starts with its own exemplar on the same slices (depths halved), trusted."""
+    params = MLParams(neighborhood=3, scales=3, insert_slices=2, max_sweeps=1, pyramid=pyramid)
+    starts = []
+
+    class Spy(ReferenceBackend):
+        def start_scale(self, model, vol, temp, p):
+            starts.append((model, vol.copy(), temp.copy()))
+            super().start_scale(model, vol, temp, p)
+
+    shape = (20, 24, 16)
+    run_ml(brick_labels[:32, :32], shape, params, 5, Spy())
+    full_depths = {"front": slice_depths(shape[0], 2, 4), "right": slice_depths(shape[2], 2, 4)}
+    for model, vol, temp in starts:
+        Z, Y, X = model.shape
+        ex = np.tile(model.exemplar, (2, 2))
+        right = full_depths["right"] // 2**model.level
+        front_cols = np.setdiff1d(np.arange(X), right)  # where the right slices cross, they were written last
+        for z in full_depths["front"] // 2**model.level:
+            np.testing.assert_array_equal(vol[z][:, front_cols], ex[:Y, front_cols])
+            assert (temp[z] == 0).all()
+        for x in right:
+            np.testing.assert_array_equal(vol[:, :, x].T, ex[:Y, :Z])
+            assert (temp[:, :, x] == 0).all()
