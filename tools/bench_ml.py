@@ -7,6 +7,9 @@ reference. Timings only: nothing here asserts on speed.
 
     python tools/bench_ml.py                 # both cases, default device
     python tools/bench_ml.py --case a --device pocl --shape 64 64 64
+    python tools/bench_ml.py --voxels-per-item 8      # OpenCL tuning, as synthesize() takes it
+
+Without tuning options it measures what synthesize() does by default.
 """
 
 from __future__ import annotations
@@ -37,13 +40,14 @@ def matmul_gflops(n: int = 2048, repeats: int = 5) -> float:
     return 2 * n**3 / best / 1e9
 
 
-def kernel_rate(device, labels, shape, k: int, factor: float | None, repeats: int = 3) -> tuple[float, float]:
+def kernel_rate(device, labels, shape, k: int, factor: float | None, tuning: dict,
+                repeats: int = 3) -> tuple[float, float]:
     """Terms/s of the Parzen kernel alone on one batch of full-resolution voxels (warm)."""
     params = MLParams(neighborhood=k, scales=1, bandwidth_factor=factor)
     model = build_scale(labels, shape, params, 0)
     rng = np.random.default_rng(0)
     vol = rng.choice(model.labels, size=model.shape)
-    backend = CLBackend(device, voxels_per_item=8)
+    backend = CLBackend(device, **tuning)
     backend.start_scale(model, vol, np.full(model.shape, 0.5), params)
     voxels = np.arange(0, vol.size, max(1, vol.size // 8192))[:8192]
     backend.group_log_sums(voxels)  # build and first launch at this size
@@ -56,9 +60,9 @@ def kernel_rate(device, labels, shape, k: int, factor: float | None, repeats: in
     return terms / best, best
 
 
-def run_case(device, labels, shape, k: int, seed: int, factor: float | None) -> dict:
+def run_case(device, labels, shape, k: int, seed: int, factor: float | None, tuning: dict) -> dict:
     r = clsolid.synthesize(labels.astype(np.uint16), shape, neighborhood=k, levels=32, rng=seed,
-                           device=device, full_output=True, voxels_per_item=8, bandwidth_factor=factor)
+                           device=device, full_output=True, bandwidth_factor=factor, **tuning)
     return r.timings
 
 
@@ -70,24 +74,30 @@ def main(argv=None) -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--bandwidth-factor", type=float, default=None,
                     help=f"times Silverman's h (default {DEFAULT_BANDWIDTH_FACTOR}; 1 = the thesis)")
+    ap.add_argument("--voxels-per-item", type=int, choices=(1, 2, 4, 8), default=None,
+                    help="voxel-views per work item (default: the engine's)")
+    ap.add_argument("--vector-width", type=int, choices=(4, 8, 16), default=None,
+                    help="exemplar sites per vector (default: the engine's)")
     args = ap.parse_args(argv)
+    tuning = {name: value for name, value in (("voxels_per_item", args.voxels_per_item),
+                                              ("vector_width", args.vector_width)) if value is not None}
     device = clsolid.select_device(args.device)
     labels = quantise(builtin_exemplar("brick"), 32)
     factor = DEFAULT_BANDWIDTH_FACTOR if args.bandwidth_factor is None else args.bandwidth_factor
     shape = tuple(args.shape)
     ref = matmul_gflops()
-    print(f"device: {device.name}")
+    print(f"device: {device.name}; tuning: {tuning or 'engine defaults'}")
     print(f"reference: NumPy float32 matmul {ref:.1f} GFLOP/s (best of 5, 2048^2)")
     for case in (["a", "b"] if args.case == "both" else [args.case]):
         title, k = CASES[case]
-        rate, dt = kernel_rate(device, labels, shape, k, args.bandwidth_factor)
+        rate, dt = kernel_rate(device, labels, shape, k, args.bandwidth_factor, tuning)
         gflops = 3 * rate / 1e9
         print(f"\n== case ({case}) {title}: brick 64x64, 32 levels -> {shape}, 3 scales, 1/8, "
               f"re-synthesis, h2-product, xi=-3, 95%, 2 views, {MLParams().insert_slices} trusted +in slices, "
               f"{factor:g} x Silverman")
         print(f"Parzen kernel: {rate / 1e9:.2f} G terms/s = {gflops:.1f} GFLOP/s at 3 flops/term "
               f"= {100 * gflops / ref:.0f}% of matmul ({dt * 1e3:.0f} ms for 8192 voxels x 2 views)")
-        timings = run_case(device, labels, shape, k, args.seed, args.bandwidth_factor)
+        timings = run_case(device, labels, shape, k, args.seed, args.bandwidth_factor, tuning)
         for s in timings["scales"]:
             sweeps = " ".join(f"{t:.2f}" for t in s["sweep_seconds"])
             print(f"  scale {'x'.join(map(str, s['shape']))}: {s['sweeps']} sweeps, {s['seconds']:.1f} s "

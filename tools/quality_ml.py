@@ -72,8 +72,9 @@ def main(argv=None) -> None:
         cells = "  ".join(f"{_fmt(s.get(('front', m)))}/{_fmt(s.get(('right', m)))}".rjust(14) for m in METRICS)
         print(f"{seed:4d}  {cells}   {seconds:8.1f}")
     arr = np.array(table, dtype=float)
-    print("mean  " + "  ".join(f"{np.nanmean(arr[:, i]):.2f}".rjust(14) for i in range(len(METRICS))))
-    print("worst " + "  ".join(f"{np.nanmax(arr[:, i]):.2f}".rjust(14) for i in range(len(METRICS))))
+    columns = [arr[:, i][np.isfinite(arr[:, i])] for i in range(len(METRICS))]  # a metric may be unmeasurable
+    print("mean  " + "  ".join(_fmt(c.mean() if c.size else None).rjust(14) for c in columns))
+    print("worst " + "  ".join(_fmt(c.max() if c.size else None).rjust(14) for c in columns))
 
 
 def _fmt(x) -> str:
