@@ -105,7 +105,8 @@ def synthesize(
     **options
         ``pyramid`` (how coarser scales' exemplars are made: ``"binomial"``, the default,
         smooths with [1 2 1]/4 before each 2:1 decimation; ``"decimate"`` keeps every other
-        pixel unfiltered, as the thesis does: see the README, Quality), ``xi`` (cooling, default -3), ``stop_fraction`` (0.95: a scale stops when the global
+        pixel unfiltered, as the thesis does: see the README, Quality), ``xi`` (cooling,
+        default -3), ``stop_fraction`` (0.95: a scale stops when the global
         temperature has fallen by this fraction, or reaches 0), ``max_sweeps`` (30 per scale),
         ``upsampling`` (``"1/8"`` or ``"8/8"``), ``inherited`` (``"resynthesize"`` with t held
         at 0, or ``"fixed"``), ``insert_slices`` (exemplar slices tiled onto this many slices

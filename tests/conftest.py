@@ -6,8 +6,10 @@ With no device: fail when ``$CI`` is set, skip locally with the reason.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -70,3 +72,17 @@ def random_state(model, seed=0, cold=0.3):
     temp = rng.random(model.shape)
     temp[temp < cold] = 0.0
     return vol, temp
+
+
+@pytest.fixture(scope="session")
+def tool():
+    """Import a script of ``tools/`` by name, e.g. ``tool("quality_ml")``."""
+    folder = Path(__file__).resolve().parents[1] / "tools"
+
+    def load(name: str):
+        spec = importlib.util.spec_from_file_location(name, folder / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        return module
+
+    return load

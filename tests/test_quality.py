@@ -32,11 +32,12 @@ def test_default_settings_beat_no_structure(device, brick_labels):
         assert hist < s["noise_hist"], f"{view}: histogram KL {hist:.3f} vs noise {s['noise_hist']:.3f}"
 
 
-def _scores_of(brick_labels, vol) -> dict[tuple[str, str], float]:
-    """Calibrated scores: 0 = as close as two halves of the exemplar, 1 = no structure
-    (shuffled pixels; uniform noise for the histogram)."""
-    report = metrics.evaluate(brick_labels, vol, views=("front", "right"), reference_repeats=3)
-    return {(r["view"], r["metric"]): r["score"] for r in report["summary"]}
+@pytest.fixture(scope="module")
+def scores_of(tool):
+    """Calibrated scores {(view, metric): score}, computed as tools/quality_ml.py (and so the
+    README's Quality table) computes them: 0 = as close as two halves of the exemplar,
+    1 = no structure (shuffled pixels; uniform noise for the histogram)."""
+    return tool("quality_ml").scores
 
 
 # Issue 2, point 16: brick 64x64 -> 64^3, 9x9, 3 scales, 1/8, re-synthesis, h2-product,
@@ -46,9 +47,9 @@ SEEDS = (1, 2, 3)
 
 
 @pytest.fixture(scope="module")
-def default_scores(device, brick_labels):
+def default_scores(device, brick_labels, scores_of):
     """The thesis case with clsolid's defaults (binomial pyramid, 0.2 x Silverman), once per seed."""
-    return {seed: _scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=seed, device=device))
+    return {seed: scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=seed, device=device))
             for seed in SEEDS}
 
 
@@ -65,9 +66,9 @@ def test_thesis_case_is_close_for_every_seed(default_scores, metric):
 
 
 @pytest.mark.slow
-def test_thesis_decimation_is_close_on_its_worst_seed(device, brick_labels):
+def test_thesis_decimation_is_close_on_its_worst_seed(device, brick_labels, scores_of):
     """The thesis's plain decimation (§2.5) meets the criterion too; seed 3 was its worst of 1-6."""
-    scores = {3: _scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=3, device=device,
+    scores = {3: scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=3, device=device,
                                                              pyramid="decimate"))}
     for metric in ("autocorrelation_l2", "histogram_kl"):
         _assert_every_seed_below(scores, metric, 0.3)
@@ -76,7 +77,7 @@ def test_thesis_decimation_is_close_on_its_worst_seed(device, brick_labels):
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="with the thesis's Silverman bandwidth the ICM is mode-seeking on brick: two dark "
                    "levels merge (seed 1: histogram 0.43; its autocorrelation, 0.05, is fine)")
-def test_thesis_bandwidth_keeps_the_grey_levels(device, brick_labels):
-    scores = {1: _scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device,
+def test_thesis_bandwidth_keeps_the_grey_levels(device, brick_labels, scores_of):
+    scores = {1: scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device,
                                                              bandwidth_factor=1.0))}
     _assert_every_seed_below(scores, "histogram_kl", 0.3)

@@ -1,29 +1,15 @@
 """The scripts in tools/ run (at toy sizes; their figures are not checked here)."""
 
-import importlib.util
-from pathlib import Path
 
-import pytest
-
-TOOLS = Path(__file__).resolve().parents[1] / "tools"
-
-
-def _load(name: str):
-    spec = importlib.util.spec_from_file_location(name, TOOLS / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_bench_ml_runs_with_tuning(capsys, device):
-    _load("bench_ml").main(["--case", "b", "--shape", "8", "8", "8", "--voxels-per-item", "2",
+def test_bench_ml_runs_with_tuning(capsys, device, tool):
+    tool("bench_ml").main(["--case", "b", "--shape", "8", "8", "8", "--voxels-per-item", "2",
                             "--device", device.device.name.strip()[:8]])
     out = capsys.readouterr().out
     assert "tuning: {'voxels_per_item': 2}" in out and "% of matmul" in out and "end to end" in out
 
 
-def test_quality_ml_prints_every_seed(capsys, device, tmp_path):
-    _load("quality_ml").main(["--seeds", "1", "2", "--shape", "8", "8", "8", "--set", "neighborhood=3",
+def test_quality_ml_prints_every_seed(capsys, device, tmp_path, tool):
+    tool("quality_ml").main(["--seeds", "1", "2", "--shape", "8", "8", "8", "--set", "neighborhood=3",
                               "--set", "pyramid=decimate", "--save", str(tmp_path / "q"),
                               "--device", device.device.name.strip()[:8]])
     lines = capsys.readouterr().out.splitlines()

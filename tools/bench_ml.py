@@ -83,7 +83,7 @@ def main(argv=None) -> None:
                                               ("vector_width", args.vector_width)) if value is not None}
     device = clsolid.select_device(args.device)
     labels = quantise(builtin_exemplar("brick"), 32)
-    factor = DEFAULT_BANDWIDTH_FACTOR if args.bandwidth_factor is None else args.bandwidth_factor
+    factor = MLParams(bandwidth_factor=args.bandwidth_factor).bandwidth_factor[0]  # as the engine resolves it
     shape = tuple(args.shape)
     ref = matmul_gflops()
     print(f"device: {device.name}; tuning: {tuning or 'engine defaults'}")
