@@ -6,7 +6,8 @@ Importing clsolid does not touch OpenCL; a device is chosen when a synthesis run
 
 from .api import synthesize
 from .device import Device, list_devices, select_device
-from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
+from .errors import (ClsolidError, DeviceMemoryError, DeviceSkippedWarning, InputError, KernelBuildError,
+                     NoDeviceError)
 from .params import HEURISTICS
 from .synth import SweepInfo, SynthesisResult
 
@@ -15,5 +16,5 @@ __version__ = "0.1.0"
 __all__ = [
     "synthesize", "select_device", "list_devices", "Device", "SweepInfo", "SynthesisResult",
     "HEURISTICS", "ClsolidError", "InputError", "NoDeviceError", "DeviceMemoryError",
-    "KernelBuildError", "__version__",
+    "KernelBuildError", "DeviceSkippedWarning", "__version__",
 ]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 from .device import Device
@@ -56,7 +57,9 @@ def build(device: Device, name: str, defines: dict[str, int | float] | None = No
     if cached is not None:
         return cached
     try:
-        program = cl.Program(device.context, source).build(options=list(options))
+        with warnings.catch_warnings():  # compiler chatter on a successful build (Intel's) is not news
+            warnings.simplefilter("ignore", cl.CompilerWarning)
+            program = cl.Program(device.context, source).build(options=list(options))
     except cl.RuntimeError as exc:
         raise KernelBuildError(
             f"building kernels/{name} with {' '.join(macros) or 'no defines'} failed on "

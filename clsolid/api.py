@@ -14,6 +14,8 @@ from .synth import SweepInfo, SynthesisResult, check_shape, resolve_seed, run_ml
 log = logging.getLogger(__name__)
 
 METHODS = ("ml",)
+#: What :func:`synthesize` returns: the exemplar's own values, or the engine's level indices.
+OUTPUTS = ("values", "labels")
 PLANNED_METHODS = ("wl", "kopf", "chen-wang")
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
                "initial_temperature", "bandwidth", "bandwidth_factor")
@@ -45,6 +47,7 @@ def synthesize(
     rng=None,
     device=None,
     progress: Callable[[SweepInfo], None] | None = None,
+    output: str = "values",
     full_output: bool = False,
     **options,
 ):
@@ -90,8 +93,10 @@ def synthesize(
         2: front (y, x) and right (y, z) planes, which share the y axis; 3: also top (z, x).
         Exemplar rows map to y in front and right, to z in top.
     levels : int or None
-        Grey levels the exemplar is quantised to (uniformly over its own range);
-        ``None`` keeps all 256 levels of an 8-bit exemplar.
+        Most grey levels (default 32). An exemplar with at most this many distinct
+        values (binary, segmented) keeps exactly those values; any other is quantised
+        uniformly over its own range into this many levels. ``None`` keeps all 256
+        levels of an 8-bit exemplar.
     rng : int, numpy.random.Generator or None
         Seed. The same seed gives the same volume on the same device.
     device : str, Device or None
@@ -100,8 +105,12 @@ def synthesize(
     progress : callable, optional
         Called with a :class:`SweepInfo` after every sweep (``info.volume()`` gives the
         current block, for evaluation during the run).
+    output : {"values", "labels"}
+        What the returned array holds: the exemplar's own values and dtype (default),
+        or the level indices the engine works on.
     full_output : bool
-        Return a :class:`SynthesisResult` (parameters, seed, timings) instead of the array.
+        Return a :class:`SynthesisResult` (both arrays, parameters, seed, timings)
+        instead of one array.
     **options
         ``pyramid`` (how coarser scales' exemplars are made: ``"binomial"``, the default,
         smooths with [1 2 1]/4 before each 2:1 decimation; ``"decimate"`` keeps every other
@@ -122,7 +131,10 @@ def synthesize(
     Returns
     -------
     ndarray or SynthesisResult
-        ``(Z, Y, X)`` grey-level indices in ``[0, levels)``, uint8 (uint16 above 256 levels).
+        ``(Z, Y, X)``. With ``output="values"``, in the exemplar's units and dtype: a
+        binary or segmented exemplar's own values (at most ``levels`` distinct values),
+        else the mean exemplar value of each of the ``levels`` levels. With
+        ``output="labels"``, level indices (uint8, uint16 above 256 levels).
 
     Raises
     ------
@@ -132,11 +144,13 @@ def synthesize(
         No OpenCL device; buffers too large for the device (checked before allocating);
         a kernel failed to build.
     """
-    from .exemplar import level_values, load_exemplar, quantise
+    from .exemplar import level_map, load_exemplar
 
     if method not in METHODS:
         planned = f" ({', '.join(PLANNED_METHODS)} are planned, not implemented yet)" if method in PLANNED_METHODS else ""
         raise InputError(f"method={method!r} is not available{planned}; use one of {METHODS}")
+    if output not in OUTPUTS:
+        raise InputError(f"output={output!r} must be one of {', '.join(map(repr, OUTPUTS))}")
     unknown = set(options) - set(_ML_OPTIONS) - set(_BACKEND_OPTIONS) - {"builtin_size"}
     if unknown:
         raise InputError(
@@ -146,15 +160,16 @@ def synthesize(
     params = MLParams(neighborhood=neighborhood, scales=scales, views=views, levels=levels,
                       heuristic=heuristic, **{k: options[k] for k in _ML_OPTIONS if k in options})
     image = load_exemplar(exemplar, builtin_size=options.get("builtin_size", 64))
-    labels_img = quantise(image, levels)
+    levels_of = level_map(image, levels)
     seed = resolve_seed(rng)
     backend = make_backend(device, {k: options[k] for k in _BACKEND_OPTIONS if k in options})
-    log.info("synthesising %s from a %s exemplar on %s, seed %d", shape, labels_img.shape, backend.name, seed)
-    vol, timings, bandwidths = run_ml(labels_img, shape, params, seed, backend, progress)
-    n_levels = 256 if levels is None else levels
-    out = np.rint(vol).astype(np.uint8 if n_levels <= 256 else np.uint16)
+    log.info("synthesising %s from a %s exemplar on %s, seed %d", shape, image.shape, backend.name, seed)
+    vol, timings, bandwidths = run_ml(levels_of.labels, shape, params, seed, backend, progress)
+    labels = np.rint(vol).astype(np.uint8 if levels_of.values.size <= 256 else np.uint16)
     if not full_output:
-        return out
+        return labels if output == "labels" else levels_of.to_values(labels)
     effective = {"method": method, **params.to_dict(), "bandwidth_effective": bandwidths, "shape": list(shape)}
-    return SynthesisResult(volume=out, exemplar=labels_img, level_values=level_values(image, levels),
+    return SynthesisResult(volume=levels_of.to_values(labels), labels=labels,
+                           exemplar=levels_of.to_values(levels_of.labels), exemplar_labels=levels_of.labels,
+                           level_values=levels_of.values, values_exact=levels_of.exact,
                            seed=seed, params=effective, device=backend.name, timings=timings)

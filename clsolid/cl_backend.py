@@ -10,6 +10,7 @@ from .errors import DeviceMemoryError, InputError
 from .ml_model import ScaleModel
 from .params import MLParams
 from .philox import TAG_INIT, seed_key
+from .probe import VECTOR_WIDTHS, probe
 
 _F4 = 4  # bytes per float32 / int32
 
@@ -43,8 +44,9 @@ class CLBackend:
     Parameters
     ----------
     device : Device
-    vector_width : int
-        Exemplar sites per vector in the distance kernel (4, 8 or 16).
+    vector_width : int or None
+        Exemplar sites per vector in the distance kernel (4, 8 or 16); None: the widest
+        the device's compiler handles (found by :func:`clsolid.probe.probe`; 16 on most).
     voxels_per_item : int
         Voxel-views per work item; they share each exemplar load.
     local_size : int
@@ -53,8 +55,10 @@ class CLBackend:
         Most voxels relaxed per launch (bounds the scratch buffer).
     """
 
-    def __init__(self, device: Device, *, vector_width: int = 16, voxels_per_item: int = 4,
+    def __init__(self, device: Device, *, vector_width: int | None = None, voxels_per_item: int = 4,
                  local_size: int = 16, max_batch: int = 32768):
+        if vector_width is None:
+            vector_width = probe(device.device).vector_width or VECTOR_WIDTHS[0]
         for name, value, allowed in (("vector_width", vector_width, (4, 8, 16)),
                                      ("voxels_per_item", voxels_per_item, (1, 2, 4, 8))):
             if value not in allowed:  # the kernel is written for exactly these

@@ -13,8 +13,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
 from .params import DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, UPSAMPLING, MLParams
 
@@ -75,7 +73,10 @@ def _add_synth(sub) -> None:
     p.add_argument("--voxel-size", type=float, nargs="+", default=None, metavar="SIZE",
                    help="voxel size for the TIFF (one value, or Z Y X)")
     p.add_argument("--unit", default="um", help="unit of --voxel-size (default um)")
-    p.add_argument("--preview", type=Path, default=None, help="PNG: exemplar beside three orthogonal mid-slices")
+    p.add_argument("--indices", action="store_true",
+                   help="write level indices (0..levels-1) instead of the exemplar's own values")
+    p.add_argument("--preview", type=Path, default=None,
+                   help="PNG: the exemplar beside a front, right and top slice, labelled")
     p.add_argument("--track", type=Path, default=None,
                    help="JSON recording the evaluation indicators after every sweep (convergence curves)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
@@ -147,7 +148,9 @@ def _tracker(levels: int, records: list):
 
 def cmd_synth(args) -> int:
     from .api import synthesize
-    from .volumeio import save_preview, save_volume
+    from .preview import save_preview
+    from .synth import preview_depths
+    from .volumeio import save_volume
 
     suffix = args.output.suffix.lower()
     if suffix not in (".tif", ".tiff", ".npy"):
@@ -175,29 +178,32 @@ def cmd_synth(args) -> int:
                         levels=args.levels, rng=args.seed, device=args.device,
                         progress=(lambda info: [h(info) for h in hooks]) if hooks else None,
                         full_output=True, **options)
-    written = save_volume(args.output, result.volume, voxel_size=voxel_size, unit=args.unit,
-                          metadata={"seed": result.seed, "levels": int(result.level_values.size)})
-    # the exemplar in the volume's grey-level indices, so `clsolid evaluate` compares like with like
-    exemplar_file = save_volume(written.with_name(f"{written.stem}_exemplar{written.suffix}"),
-                                result.exemplar[np.newaxis])
+    written_kind = "indices" if args.indices else "values"
+    written = save_volume(args.output, result.labels if args.indices else result.volume,
+                          voxel_size=voxel_size, unit=args.unit,
+                          metadata={"seed": result.seed, "written": written_kind,
+                                    "levels": int(result.level_values.size)})
     sidecar = written.with_suffix(".json")
-    meta = {"volume": str(written), "quantised_exemplar": str(exemplar_file), "exemplar": str(args.exemplar),
+    meta = {"volume": str(written), "exemplar": str(args.exemplar), "written": written_kind,
+            "values_exact": result.values_exact, "level_values": result.level_values.tolist(),
             "seed": result.seed, "device": result.device, "params": result.params,
-            "level_values": result.level_values.tolist(), "voxel_size": voxel_size, "unit": args.unit,
+            "voxel_size": voxel_size, "unit": args.unit,
             "versions": versions(), "timings": result.timings,
             "command": " ".join(sys.argv), "written_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
     sidecar.write_text(json.dumps(meta, indent=2, default=float))
     if args.preview is not None:
-        save_preview(args.preview, result.exemplar, result.volume, levels=int(result.level_values.size))
+        params = MLParams(**{k: v for k, v in result.params.items() if k in MLParams.__dataclass_fields__})
+        save_preview(args.preview, result.exemplar, result.volume, constrained=params.view_names,
+                     depths=preview_depths(result.volume.shape, params))
     if args.track is not None:
         args.track.parent.mkdir(parents=True, exist_ok=True)
         args.track.write_text(json.dumps({"exemplar": str(args.exemplar), "seed": result.seed,
                                           "records": records}, indent=2))
     if not args.quiet:
-        others = [str(p) for p in (sidecar, exemplar_file, args.preview, args.track) if p is not None]
-        print(f"wrote {written} ({'x'.join(map(str, result.volume.shape))}, seed {result.seed}, "
-              f"{result.timings['total_s']:.1f}s on {result.device}), {', '.join(others[:-1])} and {others[-1]}",
-              file=sys.stderr)
+        others = [str(p) for p in (sidecar, args.preview, args.track) if p is not None]
+        files = others[0] if len(others) == 1 else f"{', '.join(others[:-1])} and {others[-1]}"
+        print(f"wrote {written} ({'x'.join(map(str, result.volume.shape))} {written_kind}, seed {result.seed}, "
+              f"{result.timings['total_s']:.1f}s on {result.device}), {files}", file=sys.stderr)
     return EXIT_OK
 
 
@@ -205,10 +211,21 @@ def cmd_devices(args) -> int:
     from .device import list_devices
 
     devices = list_devices()
-    print(f"{'index':<6} {'type':<5} {'CUs':>4} {'memory':>10} {'max buffer':>11} {'fp64':<4}  platform / name")
+    print(f"{'index':<6} {'type':<11} {'compiles':<8} {'vec':>3} {'CUs':>4} {'memory':>10} {'max buffer':>11} {'fp64':<4}  "
+          f"{'OpenCL C':<10} {'driver':<24} platform / name")
     for d in devices:
-        print(f"{d['index']:<6} {d['type'][:5]:<5} {d['compute_units']:>4} {d['global_mem'] / 2**30:>8.1f}Gi "
-              f"{d['max_alloc'] / 2**30:>9.2f}Gi {'yes' if d['fp64'] else 'no':<4}  {d['platform']} / {d['name']}")
+        opencl_c = d["opencl_c"].removeprefix("OpenCL C").split()[0] if d["opencl_c"] else "?"
+        print(f"{d['index']:<6} {d['type']:<11} {'yes' if d['compiles'] else 'NO':<8} "
+              f"{d['vector_width'] or '-':>3} {d['compute_units']:>4} "
+              f"{d['global_mem'] / 2**30:>8.1f}Gi {d['max_alloc'] / 2**30:>9.2f}Gi {'yes' if d['fp64'] else 'no':<4}  "
+              f"{opencl_c:<10} {d['driver'][:24]:<24} {d['platform']} / {d['name']}")
+    for d in devices:
+        if not d["compiles"]:
+            print(f"{d['index']}: cannot compile kernels: {d['probe_message']}")
+    if not any(d["compiles"] for d in devices):
+        from .device import INSTALL_HINT
+
+        print(f"No device compiles. {INSTALL_HINT}.")
     return EXIT_OK
 
 

@@ -7,15 +7,26 @@ functions, so ``import clsolid`` works on a machine without any OpenCL driver.
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
-from .errors import NoDeviceError
+from .errors import DeviceSkippedWarning, KernelBuildError, NoDeviceError
+from .icd import ensure_vendors
+from .probe import probe
 
 INSTALL_HINT = (
-    "Install an OpenCL driver (ICD): on a CPU-only machine `pip install \"pyopencl[pocl]\"` "
-    "gives PoCL; on a GPU machine install the vendor's OpenCL runtime"
+    "Install an OpenCL runtime: on a CPU-only x86-64 machine `pip install \"clsolid[cpu]\"` brings "
+    "PoCL and Intel's CPU runtime (which compiles on any x86-64 CPU, AMD's included); "
+    "on a GPU machine install the vendor's OpenCL driver"
 )
+#: What to do about a CPU device whose compiler fails (e.g. PoCL's LLVM 14 on AMD Zen 5).
+CPU_FIX = (
+    "install Intel's CPU OpenCL runtime, which compiles on any x86-64 CPU: "
+    "`pip install intel-opencl-rt intel-cmplr-lib-rt` (or `pip install \"clsolid[cpu]\"`), "
+    "then select it with --device intel (device=\"intel\")"
+)
+GPU_FIX = "update the device's OpenCL driver, or choose another device (`clsolid devices` lists them)"
 
 
 @dataclass
@@ -55,6 +66,7 @@ class Device:
 
 
 def _platforms():
+    ensure_vendors()  # before the first OpenCL call: makes a pip-installed Intel CPU runtime visible
     try:
         import pyopencl as cl
     except ImportError as exc:  # pragma: no cover - pyopencl is a hard dependency
@@ -77,38 +89,60 @@ def _devices_of(platform) -> list:
         return []
 
 
-def list_devices() -> list[dict]:
+def type_name(device_type: int) -> str:
+    """The device type as one word (``GPU``, ``ACCELERATOR``, ``CPU``, ``CUSTOM``), whatever other bits are set."""
+    import pyopencl as cl
+
+    for word in ("GPU", "ACCELERATOR", "CPU", "CUSTOM"):
+        if device_type & getattr(cl.device_type, word):
+            return word
+    return "OTHER"
+
+
+def list_devices(*, probe_devices: bool = True) -> list[dict]:
     """Describe every OpenCL device visible on this machine.
+
+    Parameters
+    ----------
+    probe_devices : bool
+        Also say whether each device compiles and runs a tiny kernel (cached per device
+        and driver version, so only the first call builds anything).
 
     Returns
     -------
     list of dict
         One entry per device with keys ``index`` (``"p:d"``, usable as a device spec),
-        ``platform``, ``name``, ``type``, ``compute_units``, ``global_mem``, ``max_alloc``
-        and ``fp64``.
+        ``platform``, ``name``, ``type`` (``"CPU"``, ``"GPU"``, ``"ACCELERATOR"``…),
+        ``compute_units``, ``global_mem``, ``max_alloc``, ``fp64``, ``driver``
+        (driver version), ``opencl_c`` (OpenCL C version) and, when probed,
+        ``compiles`` (bool), ``probe_message`` (the compiler's complaint, or "") and
+        ``vector_width`` (the widest kernel vectors it handles, used by default).
 
     Raises
     ------
     NoDeviceError
         If no OpenCL platform is installed.
     """
-    import pyopencl as cl
-
     out = []
     for ip, platform in enumerate(_platforms()):
         for idev, dev in enumerate(_devices_of(platform)):
-            out.append(
-                {
-                    "index": f"{ip}:{idev}",
-                    "platform": platform.name.strip(),
-                    "name": dev.name.strip(),
-                    "type": cl.device_type.to_string(dev.type),
-                    "compute_units": int(dev.max_compute_units),
-                    "global_mem": int(dev.global_mem_size),
-                    "max_alloc": int(dev.max_mem_alloc_size),
-                    "fp64": bool(dev.double_fp_config),
-                }
-            )
+            entry = {
+                "index": f"{ip}:{idev}",
+                "platform": platform.name.strip(),
+                "name": dev.name.strip(),
+                "type": type_name(dev.type),
+                "compute_units": int(dev.max_compute_units),
+                "global_mem": int(dev.global_mem_size),
+                "max_alloc": int(dev.max_mem_alloc_size),
+                "fp64": bool(dev.double_fp_config),
+                "driver": dev.driver_version.strip(),
+                "opencl_c": dev.opencl_c_version.strip(),
+            }
+            if probe_devices:
+                result = probe(dev)
+                entry["compiles"], entry["probe_message"] = result.ok, result.message
+                entry["vector_width"] = result.vector_width
+            out.append(entry)
     return out
 
 
@@ -138,24 +172,34 @@ def _score(dev) -> tuple:
     return (bool(dev.type & cl.device_type.GPU), int(dev.global_mem_size))
 
 
-def _resolve(spec: str | None):
-    """Return the pyopencl device for *spec* (PYOPENCL_CTX syntax or a name)."""
+def _label(dev) -> str:
+    return f"{dev.platform.name.strip()} / {dev.name.strip()}"
+
+
+def _fix_for(dev) -> str:
+    import pyopencl as cl
+
+    return CPU_FIX if dev.type & cl.device_type.CPU else GPU_FIX
+
+
+def _candidates(spec: str | None) -> tuple[list, bool]:
+    """Devices matching *spec* (PYOPENCL_CTX syntax or a name), and whether one was named exactly."""
     platforms = _platforms()
     all_devices = [d for p in platforms for d in _devices_of(p)]
     if not all_devices:
         raise NoDeviceError(f"OpenCL platforms exist but expose no device. {INSTALL_HINT}.")
     if spec is None or not spec.strip():
-        return max(all_devices, key=_score)
+        return all_devices, False
     spec = spec.strip()
     if ":" in spec:
         ptok, dtok = spec.split(":", 1)
         platform = _pick(platforms, ptok, "OpenCL platform", lambda p: p.name)
         devices = _devices_of(platform)
         if not dtok.strip():
-            return max(devices, key=_score)
-        return _pick(devices, dtok, f"device on platform {platform.name.strip()!r}", lambda d: d.name)
+            return devices, False
+        return [_pick(devices, dtok, f"device on platform {platform.name.strip()!r}", lambda d: d.name)], True
     if spec.isdigit():
-        return max(_devices_of(_pick(platforms, spec, "OpenCL platform", lambda p: p.name)), key=_score)
+        return _devices_of(_pick(platforms, spec, "OpenCL platform", lambda p: p.name)), False
     low = spec.lower()
     if low in ("cpu", "gpu", "accelerator"):
         import pyopencl as cl
@@ -164,12 +208,32 @@ def _resolve(spec: str | None):
         typed = [d for d in all_devices if d.type & kind]
         if not typed:
             raise NoDeviceError(f"no OpenCL device of type {low!r}; run `clsolid devices` to list them")
-        return max(typed, key=_score)
+        return typed, False
     by_name = [d for d in all_devices if low in d.name.lower() or low in d.platform.name.lower()]
     if not by_name:
         names = ", ".join(repr(d.name.strip()) for d in all_devices)
         raise NoDeviceError(f"no OpenCL device matches {spec!r} (have: {names}); run `clsolid devices`")
-    return max(by_name, key=_score)
+    return by_name, len(by_name) == 1
+
+
+def _resolve(spec: str | None):
+    """The best device matching *spec* that compiles; skips (with a warning) those that do not."""
+    candidates, exact = _candidates(spec)
+    failed = [(d, probe(d)) for d in candidates]
+    working = [d for d, result in failed if result.ok]
+    failed = [(d, result) for d, result in failed if not result.ok]
+    if exact and failed:
+        dev, result = failed[0]
+        raise KernelBuildError(f"the OpenCL device {_label(dev)} cannot compile kernels "
+                               f"({result.message}); {_fix_for(dev)}")
+    if not working:
+        why = "; ".join(f"{_label(d)}: {r.message}" for d, r in failed)
+        raise NoDeviceError(f"no OpenCL device{'' if spec is None else f' matching {spec!r}'} can compile "
+                            f"kernels ({why}). {INSTALL_HINT}.")
+    for dev, result in failed:
+        warnings.warn(f"skipping OpenCL device {_label(dev)}: it cannot compile kernels ({result.message})",
+                      DeviceSkippedWarning, stacklevel=4)
+    return max(working, key=_score)
 
 
 def select_device(spec: "str | Device | None" = None) -> Device:
@@ -181,7 +245,9 @@ def select_device(spec: "str | Device | None" = None) -> Device:
         ``PYOPENCL_CTX`` syntax (``"0"``, ``"0:1"``, ``"portable:"``), a substring of a
         device or platform name (``"pocl"``, ``"H100"``), or a type (``"cpu"``, ``"gpu"``).
         ``None`` falls back to ``$CLSOLID_DEVICE``, then ``$PYOPENCL_CTX``, then the best
-        device (a GPU first, then the most global memory). Never prompts.
+        device (a GPU first, then the most global memory). Never prompts. Devices
+        that cannot compile a tiny probe kernel (cached per driver version) are
+        skipped, with a :class:`DeviceSkippedWarning`.
 
     Returns
     -------
@@ -190,7 +256,11 @@ def select_device(spec: "str | Device | None" = None) -> Device:
     Raises
     ------
     NoDeviceError
-        No OpenCL platform, or nothing matches *spec*; the message says how to fix it.
+        No OpenCL platform, nothing matches *spec*, or no matching device compiles;
+        the message says how to fix it.
+    KernelBuildError
+        *spec* names exactly one device and it cannot compile (the message gives the
+        compiler's complaint and the fix).
     """
     if isinstance(spec, Device):
         return spec

@@ -29,3 +29,7 @@ class DeviceMemoryError(ClsolidError, MemoryError):
 
 class KernelBuildError(ClsolidError, RuntimeError):
     """An OpenCL program failed to compile on the chosen device."""
+
+
+class DeviceSkippedWarning(UserWarning):
+    """Automatic device selection passed over a device that cannot compile kernels."""

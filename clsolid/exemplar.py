@@ -8,6 +8,7 @@ the synthesis code can assume a finite, real, non-empty 2D array.
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -280,12 +281,74 @@ def quantise(image: np.ndarray, levels: int | None = 32) -> np.ndarray:
     return np.clip(labels, 0, levels - 1).astype(np.int32)
 
 
-def level_values(image: np.ndarray, levels: int | None) -> np.ndarray:
-    """Grey value, in *image*'s units, at the centre of each bin of :func:`quantise`.
+@dataclass(frozen=True)
+class LevelMap:
+    """How an exemplar's values become the label indices the engine works on, and back.
 
-    ``level_values(image, levels)[quantise(image, levels)]`` maps labels back to grey values.
+    Attributes
+    ----------
+    labels : numpy.ndarray
+        int32 image of label indices, ``0 <= labels < values.size``.
+    values : numpy.ndarray
+        ``values[i]`` is label ``i`` in the exemplar's own units and dtype.
+    exact : bool
+        True when ``values`` are exactly the values found in the exemplar (a binary or
+        segmented image, or one already holding at most ``levels`` values); False when
+        each is the mean of the exemplar pixels quantised to that level.
+    """
+
+    labels: np.ndarray
+    values: np.ndarray
+    exact: bool
+
+    def to_values(self, labels: np.ndarray) -> np.ndarray:
+        """Map label indices back to the exemplar's values (and dtype)."""
+        return self.values[labels]
+
+
+def _bin_means(image: np.ndarray, labels: np.ndarray, levels: int) -> np.ndarray:
+    """Mean of the pixels of each level, in the image's dtype; an empty level gets its bin centre."""
+    counts = np.bincount(labels.ravel(), minlength=levels)
+    sums = np.bincount(labels.ravel(), weights=image.ravel().astype(np.float64), minlength=levels)
+    lo, hi = float(np.min(image)), float(np.max(image))
+    centres = lo + (np.arange(levels) + 0.5) * (hi - lo) / levels
+    means = np.where(counts > 0, sums / np.maximum(counts, 1), centres)
+    if image.dtype.kind in "iu":
+        info = np.iinfo(image.dtype)
+        return np.clip(np.rint(means), info.min, info.max).astype(image.dtype)
+    return means.astype(image.dtype)
+
+
+def level_map(image: np.ndarray, levels: int | None) -> LevelMap:
+    """Labels of *image* for the engine, and the value each label stands for.
+
+    Parameters
+    ----------
+    image : numpy.ndarray
+        The exemplar (2D, real, finite).
+    levels : int or None
+        Most grey levels. ``None`` keeps the 256 levels of a uint8 image.
+
+    Returns
+    -------
+    LevelMap
+
+    Notes
+    -----
+    - ``levels=None`` (uint8 only): the labels are the pixel values, and so are the values.
+    - At most ``levels`` distinct values (a binary or segmented micrograph): the labels are
+      their ranks (0, 1, 2, … in increasing value; equally spaced for the Parzen
+      distances) and the values are exactly those values, so a volume holds only values
+      that occur in the exemplar.
+    - Otherwise :func:`quantise` makes ``levels`` equal-width levels over the image's range,
+      and each level's value is the mean of the exemplar pixels in it (an empty level
+      gets its bin centre; integer images round the mean).
     """
     if levels is None:
-        return np.arange(256, dtype=np.float64)
-    lo, hi = float(np.min(image)), float(np.max(image))
-    return lo + (np.arange(levels) + 0.5) * (hi - lo) / levels
+        labels = quantise(image, None)
+        return LevelMap(labels, np.arange(256, dtype=np.uint8), True)
+    distinct = np.unique(image)
+    if distinct.size <= _check_levels(levels):
+        return LevelMap(np.searchsorted(distinct, image).astype(np.int32), distinct, True)
+    labels = quantise(image, levels)
+    return LevelMap(labels, _bin_means(image, labels, levels), False)

@@ -32,6 +32,8 @@ for _name, (_code, _thesis, _paper) in HEURISTICS.items():
 #: Axes are 0 = z, 1 = y, 2 = x. Front and right share y, the stacking axis of laminar
 #: textures; top is the (z, x) plane.
 VIEW_AXES: dict[str, tuple[int, int]] = {"front": (1, 2), "right": (1, 0), "top": (0, 2)}
+#: View name -> the volume axis its slices are stacked along (front: z, right: x, top: y).
+DEPTH_AXIS: dict[str, int] = {"front": 0, "right": 2, "top": 1}
 VIEW_SETS: dict[int, tuple[str, ...]] = {2: ("front", "right"), 3: ("front", "right", "top")}
 
 UPSAMPLING = ("1/8", "8/8")

@@ -48,7 +48,8 @@ def add_evaluate_arguments(parser: argparse.ArgumentParser) -> None:
                         help="views the synthesis constrained, for labelling (default: front right)")
     parser.add_argument("--levels", type=int, default=None,
                         help="quantise both into this many grey levels before the histogram "
-                             "statistics (default: use the grey levels as they are)")
+                             "statistics (default: as `clsolid synth` made VOLUME, read from its "
+                             "JSON sidecar; without one, the grey levels as they are)")
     parser.add_argument("-o", "--output", metavar="REPORT.json", help="write the full report as JSON")
     parser.add_argument("--plot", metavar="REPORT.png", help="draw the report as a PNG (needs matplotlib)")
     parser.add_argument("--track", metavar="TRACK.json",
@@ -99,8 +100,13 @@ def _run_evaluation(args: argparse.Namespace) -> None:
         raise InputError(f"--max-slices={args.max_slices} must be >= 0 (0 = all slices)")
     exemplar = load_exemplar(args.exemplar)
     volume = load_volume(args.volume)
+    levels = args.levels
+    if levels is None:
+        exemplar, levels, note = like_with_like(exemplar, args.volume)
+        if note:
+            print(note)
     report = evaluate(exemplar, volume, views=args.views, constrained=args.constrained or (),
-                      levels=args.levels, max_slices=args.max_slices or None, rng=args.seed,
+                      levels=levels, max_slices=args.max_slices or None, rng=args.seed,
                       reference_repeats=args.repeats, periodic=not args.non_periodic)
     report["files"] = {"exemplar": str(args.exemplar), "volume": str(args.volume)}
     print(format_table(report))
@@ -148,6 +154,35 @@ def load_volume(path: Any) -> np.ndarray:
     if arr.ndim != 3:
         raise InputError(f"VOLUME={str(path)!r} holds an array of shape {arr.shape}; expected (Z, Y, X)")
     return arr
+
+
+def like_with_like(exemplar: np.ndarray, volume_path: Any) -> tuple[np.ndarray, int | None, str]:
+    """Put the exemplar in the units of a ``clsolid synth`` volume, read from its JSON sidecar.
+
+    A volume of level means is compared after quantising both into the synthesis's
+    levels; a volume of level indices against the exemplar's indices; a volume of the
+    exemplar's exact values as it is. Without a sidecar nothing changes.
+
+    Returns
+    -------
+    (exemplar, levels, note)
+        The exemplar to compare with, the ``levels`` to pass to :func:`evaluate`, and a
+        line saying what was done ("" when nothing was).
+    """
+    from .exemplar import level_map
+
+    sidecar = pathlib.Path(volume_path).with_suffix(".json")
+    try:
+        meta = json.loads(sidecar.read_text())
+        written, exact, levels = meta["written"], bool(meta["values_exact"]), meta["params"]["levels"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return exemplar, None, ""
+    if written == "indices":
+        return (level_map(exemplar, levels).labels, None,
+                f"{sidecar}: the volume holds level indices; the exemplar is compared as indices too")
+    if exact or levels is None:
+        return exemplar, None, ""
+    return exemplar, int(levels), f"{sidecar}: level means of {levels} levels; both quantised to {levels} levels"
 
 
 def _squeeze(arr: np.ndarray) -> np.ndarray:

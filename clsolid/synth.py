@@ -13,7 +13,7 @@ import numpy as np
 
 from .errors import InputError
 from .ml_model import ScaleModel, build_scale, check_exemplar_fits
-from .params import MLParams
+from .params import DEPTH_AXIS, MLParams
 from .schedule import set_order, split_by_colour
 
 log = logging.getLogger(__name__)
@@ -53,12 +53,21 @@ class SynthesisResult:
     Attributes
     ----------
     volume : ndarray
-        ``(Z, Y, X)`` grey-level indices in ``[0, levels)`` (uint8, or uint16 above 256).
+        ``(Z, Y, X)`` in the exemplar's own units and dtype: the exemplar's own values
+        when it holds at most ``levels`` of them, else each level's mean value
+        (see :func:`clsolid.exemplar.level_map`).
+    labels : ndarray
+        The same volume as level indices in ``[0, level_values.size)`` (uint8, or uint16
+        above 256 levels): what the engine works on.
     exemplar : ndarray
-        The quantised exemplar the volume was grown from (same grey-level indices).
+        The exemplar as the engine saw it, in its own units (each pixel replaced by its
+        level's value; identical to the input when ``values_exact``).
+    exemplar_labels : ndarray
+        The same exemplar as level indices.
     level_values : ndarray
-        Grey value, in the exemplar's own units, of each index (the centre of its bin);
-        ``level_values[volume]`` maps the volume back to the exemplar's scale.
+        Value of each level index: ``level_values[labels] == volume``.
+    values_exact : bool
+        Whether ``level_values`` are exactly values of the exemplar (False: level means).
     seed : int
         The seed actually used; passing it as ``rng`` reproduces the volume on the same device.
     params : dict
@@ -71,16 +80,15 @@ class SynthesisResult:
     """
 
     volume: np.ndarray
+    labels: np.ndarray
     exemplar: np.ndarray
+    exemplar_labels: np.ndarray
     level_values: np.ndarray
+    values_exact: bool
     seed: int
     params: dict
     device: str
     timings: dict
-
-    def grey(self) -> np.ndarray:
-        """The volume in the exemplar's grey-value units."""
-        return self.level_values[self.volume]
 
 
 def resolve_seed(rng) -> int:
@@ -111,6 +119,31 @@ def slice_depths(size: int, count: int, step: int) -> np.ndarray:
     """*count* evenly spaced depths on multiples of *step* (so they survive decimation)."""
     slots = max(1, -(-size // step))
     return np.unique(np.linspace(0, slots, count, endpoint=False).astype(int)) * step
+
+
+def inserted_depths(shape: tuple[int, int, int], params: MLParams) -> dict[str, np.ndarray]:
+    """Full-resolution depths of the ``+in`` slices of each constrained view (front: z, right: x, top: y)."""
+    if params.insert_slices == 0:
+        return {view: np.empty(0, int) for view in params.view_names}
+    step = 2 ** (params.scales - 1)
+    return {view: slice_depths(shape[DEPTH_AXIS[view]], params.insert_slices, step) for view in params.view_names}
+
+
+def far_depth(size: int, taken: np.ndarray) -> int:
+    """The depth farthest (on the torus) from every *taken* one; the middle one among equals."""
+    d = np.arange(size)
+    if taken.size == 0:
+        return size // 2
+    gap = np.abs(d[:, None] - taken[None, :])
+    dist = np.minimum(gap, size - gap).min(axis=1)
+    best = np.flatnonzero(dist == dist.max())
+    return int(best[np.argmin(np.abs(best - size // 2))])
+
+
+def preview_depths(shape: tuple[int, int, int], params: MLParams) -> dict[str, int]:
+    """One slice per view to show, away from every ``+in`` slice (which only shows the exemplar)."""
+    taken = inserted_depths(shape, params)
+    return {view: far_depth(shape[a], taken.get(view, np.empty(0, int))) for view, a in DEPTH_AXIS.items()}
 
 
 def insert_slices(vol: np.ndarray, labels_img: np.ndarray, views: tuple[str, ...], count: int, step: int) -> np.ndarray:

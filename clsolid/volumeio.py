@@ -1,4 +1,4 @@
-"""Reading and writing volumes, plus a one-image preview of a synthesis result.
+"""Reading and writing volumes.
 
 Volumes are ``(Z, Y, X)`` arrays. TIFF output is an ImageJ hyperstack so that Fiji
 opens it as a z-stack with the right voxel size; ``.npy`` keeps the bare array.
@@ -27,10 +27,6 @@ PathLike = Union[str, "os.PathLike[str]"]
 VOLUME_WRITE_SUFFIXES = (".tif", ".tiff", ".npy")
 #: Extensions :func:`load_volume` can read.
 VOLUME_READ_SUFFIXES = (".tif", ".tiff", ".npy", ".png")
-#: Smallest height, in pixels, of the panels of :func:`save_preview`.
-PREVIEW_MIN_HEIGHT = 128
-#: Width, in pixels, of the white gap between preview panels.
-PREVIEW_GAP = 4
 
 # ImageJ "Properties" keys under which we store what the ImageJ header cannot say.
 _PROP_AXES = "clsolid.axes"
@@ -385,123 +381,3 @@ def load_volume(path: PathLike) -> tuple[np.ndarray, dict]:
             "convert it to grey first (e.g. skimage.color.rgb2gray)"
         )
     return data, info
-
-
-def _panels(exemplar: np.ndarray, volume: np.ndarray) -> list[np.ndarray]:
-    """Exemplar, then the (y, x), (y, z) and (z, x) mid-slices of the volume."""
-    zc, yc, xc = (n // 2 for n in volume.shape)
-    return [exemplar, volume[zc], volume[:, :, xc].T, volume[:, yc, :]]
-
-
-def _to_grey8(panels: list[np.ndarray], levels: int | None) -> list[np.ndarray]:
-    """Map every panel through one linear grey scale onto 0..255."""
-    if levels is not None:
-        lo, hi = 0.0, float(levels - 1)
-    else:
-        lo = min(float(p.min()) for p in panels)
-        hi = max(float(p.max()) for p in panels)
-    # Halving first keeps the span finite even for extreme float ranges.
-    half_span = hi / 2 - lo / 2
-    out = []
-    for p in panels:
-        if half_span > 0:
-            scaled = (p.astype(np.float64) / 2 - lo / 2) * (255.0 / half_span)
-        else:
-            scaled = np.zeros(p.shape)
-        out.append(np.clip(np.rint(scaled), 0, 255).astype(np.uint8))
-    return out
-
-
-def _common_height(heights: list[int]) -> int | None:
-    """Smallest multiple of every height that is at least the minimum, if not too tall."""
-    target = math.lcm(*heights)
-    target *= max(1, -(-PREVIEW_MIN_HEIGHT // target))
-    # Beyond twice the minimum or the tallest panel the image grows needlessly large; pad instead.
-    return target if target <= 2 * max(PREVIEW_MIN_HEIGHT, max(heights)) else None
-
-
-def _scale_panels(panels: list[np.ndarray]) -> list[np.ndarray]:
-    """Nearest-neighbour integer up-scaling of every panel to one height.
-
-    When the least common multiple of the heights is too large to serve as the
-    common height, each panel gets the largest integer factor that
-    fits and is padded at the bottom with white.
-    """
-    heights = [p.shape[0] for p in panels]
-    target = _common_height(heights)
-    exact = target is not None
-    if target is None:
-        target = max(PREVIEW_MIN_HEIGHT, max(heights))
-    scaled = []
-    for p in panels:
-        k = max(1, target // p.shape[0])
-        big = np.repeat(np.repeat(p, k, axis=0), k, axis=1)
-        if not exact and big.shape[0] < target:
-            pad = np.full((target - big.shape[0], big.shape[1]), 255, dtype=np.uint8)
-            big = np.vstack([big, pad])
-        scaled.append(big)
-    return scaled
-
-
-def _check_preview_inputs(exemplar: Any, volume: Any, levels: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Validate the arrays and ``levels`` of :func:`save_preview`."""
-    if not isinstance(exemplar, np.ndarray) or exemplar.ndim != 2 or exemplar.size == 0:
-        shape = getattr(exemplar, "shape", type(exemplar).__name__)
-        raise InputError(f"exemplar must be a non-empty 2D numpy array, got {shape}; pass the 2D exemplar")
-    vol = _check_volume(volume)
-    for name, arr in (("exemplar", exemplar), ("volume", vol)):
-        if arr.dtype.kind not in "biuf":
-            raise InputError(f"{name} has unsupported dtype {arr.dtype}; use an integer or float array")
-        if arr.dtype.kind == "f" and not np.isfinite(arr).all():
-            raise InputError(f"{name} contains NaN or infinite values; replace them before previewing")
-    if levels is not None and (not isinstance(levels, (int, np.integer)) or isinstance(levels, bool) or levels < 2):
-        raise InputError(f"levels must be None or an integer >= 2, got {levels!r}; pass the number of grey levels")
-    return exemplar, vol
-
-
-def save_preview(
-    path: PathLike, exemplar: np.ndarray, volume: np.ndarray, *, levels: int | None = None
-) -> pathlib.Path:
-    """Save the exemplar beside three orthogonal mid-slices of the volume as one grey PNG.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Output ``.png`` file (any case); parent directories are created and an
-        existing file is overwritten.
-    exemplar : numpy.ndarray
-        2D exemplar (grey values or labels).
-    volume : numpy.ndarray
-        ``(Z, Y, X)`` volume.
-    levels : int, optional
-        When given, both arrays are read as labels in ``0..levels-1`` and mapped
-        so that label 0 is black and ``levels-1`` white. Otherwise one linear
-        mapping from the joint min..max of the four panels is used.
-
-    Returns
-    -------
-    pathlib.Path
-        The path written.
-
-    Notes
-    -----
-    Panels, left to right, separated by :data:`PREVIEW_GAP` white columns:
-    the exemplar; ``volume[Z//2]`` (rows y, columns x); ``volume[:, :, X//2].T``
-    (rows y, columns z); ``volume[:, Y//2, :]`` (rows z, columns x). Each panel
-    is enlarged by an integer nearest-neighbour factor to a common height of at
-    least :data:`PREVIEW_MIN_HEIGHT` pixels. When integer factors would need a
-    common height above twice that minimum and twice the tallest panel (e.g.
-    heights 64 and 100 need 1600), each
-    panel gets the largest factor that fits and is padded with white below.
-    """
-    p = _as_path(path, "path")
-    _suffix(p, "path", (".png",))
-    ex, vol = _check_preview_inputs(exemplar, volume, levels)
-    panels = _scale_panels(_to_grey8(_panels(ex, vol), levels))
-    gap = np.full((panels[0].shape[0], PREVIEW_GAP), 255, dtype=np.uint8)
-    pieces: list[np.ndarray] = []
-    for i, panel in enumerate(panels):
-        pieces.extend([gap, panel] if i else [panel])
-    p.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(np.ascontiguousarray(np.hstack(pieces))).save(p, format="PNG")
-    return p

@@ -14,11 +14,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-# Each test process gets its own PoCL kernel cache (parallel runs must not share one).
+# Each test process gets its own PoCL kernel cache (parallel runs must not share one), and
+# its own clsolid cache (device probes, OpenCL vendors directory), so no stale answer leaks in.
 os.environ.setdefault("POCL_CACHE_DIR", tempfile.mkdtemp(prefix="clsolid-pocl-"))
+os.environ.setdefault("CLSOLID_CACHE_DIR", tempfile.mkdtemp(prefix="clsolid-cache-"))
 
 
 def _device_specs() -> list[str]:
+    """Every device that compiles (PoCL and Intel's CPU runtime where both do), as "p:d"."""
     try:
         from clsolid.device import list_devices
 
@@ -26,15 +29,23 @@ def _device_specs() -> list[str]:
     except Exception as exc:  # noqa: BLE001 - reported below
         return [f"!{exc}"]
     wanted = os.environ.get("PYOPENCL_TEST", "").lower()
-    specs = [d["index"] for d in devices
-             if not wanted or wanted in d["name"].lower() or wanted in d["platform"].lower()]
-    return specs or ["!no OpenCL device matches PYOPENCL_TEST"]
+    matching = [d for d in devices if not wanted or wanted in d["name"].lower() or wanted in d["platform"].lower()]
+    specs = [d["index"] for d in matching if d["compiles"]]
+    if specs:
+        return specs
+    if matching:
+        why = "; ".join(f"{d['platform']} / {d['name']}: {d['probe_message']}" for d in matching)
+        return [f"!no OpenCL device compiles ({why})"]
+    return ["!no OpenCL device matches PYOPENCL_TEST"]
 
 
 _DEVICES: dict = {}
 
 
-@pytest.fixture(params=_device_specs(), scope="session")
+DEVICE_SPECS = _device_specs()
+
+
+@pytest.fixture(params=DEVICE_SPECS, scope="session")
 def device(request):
     """A :class:`clsolid.Device` for each visible OpenCL device (one per session)."""
     spec = request.param

@@ -106,9 +106,9 @@ def test_no_platform_says_how_to_install(monkeypatch):
     import pyopencl as cl
 
     monkeypatch.setattr(cl, "get_platforms", lambda: [])
-    with pytest.raises(NoDeviceError, match="pocl"):
+    with pytest.raises(NoDeviceError, match=r"pip install \"clsolid\[cpu\]\""):
         clsolid.select_device()
-    with pytest.raises(NoDeviceError, match="pocl"):
+    with pytest.raises(NoDeviceError, match=r"pip install \"clsolid\[cpu\]\""):
         clsolid.list_devices()
 
 
@@ -126,18 +126,26 @@ def test_select_device_by_syntax_and_name(device):
 def test_list_devices_describes_each_device(device):
     devices = clsolid.list_devices()
     assert devices and {"index", "platform", "name", "type", "compute_units", "global_mem", "max_alloc",
-                        "fp64"} <= set(devices[0])
+                        "fp64", "driver", "opencl_c", "compiles", "probe_message"} <= set(devices[0])
+    assert {d["type"] for d in devices} <= {"CPU", "GPU", "ACCELERATOR", "CUSTOM", "OTHER"}
 
 
 def test_result_object_reports_everything(device):
     r = clsolid.synthesize("brick", (8, 10, 12), rng=5, device=device, full_output=True, **SMALL)
-    assert r.volume.shape == (8, 10, 12) and r.volume.dtype == np.uint8
-    assert r.volume.max() < 8 and r.seed == 5
+    assert r.labels.shape == (8, 10, 12) and r.labels.dtype == np.uint8
+    assert r.labels.max() < 8 and r.seed == 5 and not r.values_exact
+    # brick is float64 (area-averaged): the volume holds its level means, in its dtype
+    assert r.volume.dtype == np.float64 and r.level_values.size == 8
+    np.testing.assert_array_equal(r.volume, r.level_values[r.labels])
+    np.testing.assert_array_equal(r.exemplar, r.level_values[r.exemplar_labels])
     assert r.params["neighborhood"] == 3 and r.params["heuristic"] == "h2-product"
     assert len(r.params["bandwidth_effective"]) == 1 and r.params["bandwidth_effective"][0] > 0
     assert r.timings["total_s"] > 0 and r.timings["scales"][0]["sweeps"] >= 1
-    assert r.grey().shape == r.volume.shape and r.level_values.size == 8
     np.testing.assert_array_equal(clsolid.synthesize("brick", (8, 10, 12), rng=5, device=device, **SMALL), r.volume)
+    np.testing.assert_array_equal(
+        clsolid.synthesize("brick", (8, 10, 12), rng=5, device=device, output="labels", **SMALL), r.labels)
+    with pytest.raises(InputError, match="output"):
+        clsolid.synthesize("brick", (8, 10, 12), device=device, output="indices", **SMALL)
 
 
 def test_progress_reports_every_sweep(device):
@@ -160,14 +168,41 @@ def test_rng_generator_and_none():
         clsolid.synthesize(ex, (4, 4, 4), device="reference", rng=-1, **SMALL)
 
 
-def test_grey_maps_levels_back_to_input_units():
-    from clsolid.exemplar import level_values, quantise
+def test_level_means_stand_for_each_level():
+    from clsolid.exemplar import level_map, quantise
 
     img = np.linspace(10.0, 250.0, 400).reshape(20, 20)
-    labels = quantise(img, 16)
-    back = level_values(img, 16)[labels]
-    assert np.abs(back - img).max() <= (250 - 10) / 16 / 2 + 1e-9  # within half a bin
-    assert level_values(img, None).tolist() == list(range(256))
+    m = level_map(img, 16)
+    np.testing.assert_array_equal(m.labels, quantise(img, 16))
+    assert not m.exact and m.values.dtype == np.float64
+    for level in range(16):  # each value is the mean of the exemplar pixels of its level
+        assert m.values[level] == pytest.approx(img[m.labels == level].mean())
+    assert np.abs(m.to_values(m.labels) - img).max() <= (250 - 10) / 16  # within a bin
+    assert level_map(img.astype(np.uint8), None).values.tolist() == list(range(256))
+
+
+@pytest.mark.parametrize("name, image, exact", [
+    ("binary", np.where(np.add.outer(np.arange(16), np.arange(16)) % 5 < 2, 255, 0).astype(np.uint8), True),
+    ("3-phase", (np.add.outer(np.arange(16), 2 * np.arange(16)) % 3).astype(np.uint8), True),
+    ("8-bit", (np.arange(256).reshape(16, 16)).astype(np.uint8), False),
+    ("16-bit", (np.arange(256).reshape(16, 16) * 257).astype(np.uint16), False),
+    ("float", np.linspace(-1.5, 2.5, 256).reshape(16, 16).astype(np.float32), False),
+])
+def test_volume_in_the_exemplar_units(name, image, exact):
+    """The volume comes back in the exemplar's dtype; few-valued exemplars keep their exact values."""
+    r = clsolid.synthesize(image, (6, 6, 6), rng=2, device="reference", full_output=True,
+                           neighborhood=3, scales=1, levels=8)
+    assert r.volume.dtype == image.dtype and r.values_exact == exact, name
+    np.testing.assert_array_equal(r.volume, r.level_values[r.labels])
+    if exact:  # only values that occur in the exemplar, and the exemplar unchanged
+        assert set(np.unique(r.volume)) <= set(np.unique(image))
+        np.testing.assert_array_equal(r.exemplar, image)
+    else:  # one value per level, each the mean of the exemplar pixels of that level
+        for level in np.unique(r.exemplar_labels):
+            mean = image[r.exemplar_labels == level].astype(np.float64).mean()
+            tol = 0.5 if image.dtype.kind in "iu" else 1e-6
+            assert abs(float(r.level_values[level]) - mean) <= tol
+        assert r.volume.min() >= image.min() and r.volume.max() <= image.max()
 
 
 @pytest.mark.parametrize("option, value", [("voxels_per_item", 3), ("vector_width", 32), ("local_size", 0),

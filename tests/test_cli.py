@@ -5,7 +5,6 @@ import json
 import numpy as np
 import pytest
 
-from clsolid.exemplar import builtin_exemplar, quantise
 from clsolid.cli import EXIT_MEMORY, EXIT_NO_DEVICE, EXIT_USAGE, main
 from clsolid.volumeio import load_volume
 
@@ -19,22 +18,42 @@ def test_synth_writes_volume_sidecar_preview_and_track(tmp_path, capsys, device)
                  "--device", device.device.name.strip()[:8]])
     assert code == 0
     vol, info = load_volume(out)
-    assert vol.shape == (8, 10, 12) and vol.max() < 8
+    assert vol.shape == (8, 10, 12) and vol.dtype == np.float32  # brick's level means, as ImageJ floats
     assert info["voxel_size"] == pytest.approx((2.0, 0.5, 0.5))
     meta = json.loads((tmp_path / "v.json").read_text())
     assert meta["seed"] == 3 and meta["params"]["neighborhood"] == 3 and meta["params"]["levels"] == 8
     assert meta["versions"]["clsolid"] and meta["device"]
     assert len(meta["timings"]["scales"]) == 2 and meta["timings"]["scales"][0]["sweep_seconds"]
     assert (tmp_path / "p.png").stat().st_size > 100
-    from clsolid.report import load_exemplar
-    np.testing.assert_array_equal(load_exemplar(tmp_path / "v_exemplar.tif"), quantise(builtin_exemplar("brick"), 8))
-    assert meta["quantised_exemplar"].endswith("v_exemplar.tif")
+    assert meta["written"] == "values" and not meta["values_exact"] and len(meta["level_values"]) == 8
+    assert set(np.unique(vol)) <= set(np.float32(meta["level_values"]))
+    assert not (tmp_path / "v_exemplar.tif").exists()
     track = json.loads((tmp_path / "t.json").read_text())
     assert len(track["records"]) == sum(s["sweeps"] for s in meta["timings"]["scales"])
     assert {"autocorrelation_front", "histogram_kl_right"} <= set(track["records"][0]["indicators"])
     err = capsys.readouterr().err
     assert "scale 2/2" in err and "sweep" in err and "ETA" in err and "wrote" in err
     assert "p.png" in err and "t.json" in err
+
+
+def test_indices_flag_writes_level_indices(tmp_path, device):
+    assert main(["synth", "brick", "-o", str(tmp_path / "v.npy"), *FAST, "-q", "--indices"]) == 0
+    vol = np.load(tmp_path / "v.npy")
+    assert vol.dtype == np.uint8 and vol.max() < 8
+    assert json.loads((tmp_path / "v.json").read_text())["written"] == "indices"
+
+
+def test_evaluate_compares_like_with_like_through_the_sidecar(tmp_path, capsys, device):
+    """No extra exemplar file: evaluate reads how the volume was written from its sidecar."""
+    for flag in ([], ["--indices"]):
+        out = tmp_path / f"v{len(flag)}.npy"
+        assert main(["synth", "brick", "-o", str(out), *FAST, "-q", *flag]) == 0
+        assert main(["evaluate", "brick", str(out), "--repeats", "2", "-o", str(tmp_path / "r.json")]) == 0
+        report = json.loads((tmp_path / "r.json").read_text())
+        assert report["settings"]["levels"] == (None if flag else 8)
+        # a like-with-like histogram: the volume only holds the exemplar's levels
+        assert report["views"]["front"]["distances"]["histogram_kl"]["value"] < 1.0
+    assert "level means of 8 levels" in capsys.readouterr().out
 
 
 def test_same_seed_same_file(tmp_path, device):

@@ -31,6 +31,23 @@ def test_whole_run_matches_reference(device, small_labels, k, views, heuristic, 
     assert [s["sweeps"] for s in got_t["scales"]] == [s["sweeps"] for s in ref_t["scales"]]
 
 
+def test_every_runtime_grows_nearly_the_same_volume(small_labels):
+    """PoCL and Intel's CPU runtime (and any other that compiles) agree as each does with float64."""
+    from conftest import DEVICE_SPECS, _DEVICES
+
+    from clsolid.device import select_device
+
+    specs = [s for s in DEVICE_SPECS if not s.startswith("!")]
+    if len(specs) < 2:
+        pytest.skip(f"only {len(specs)} OpenCL runtime compiles here: nothing to compare")
+    params = MLParams(neighborhood=5, scales=2, insert_slices=1)
+    volumes = [run_ml(small_labels, (16, 12, 14), params, 5, CLBackend(_DEVICES.get(s) or select_device(s)))[0]
+               for s in specs]
+    for spec, vol in zip(specs[1:], volumes[1:]):
+        agree = np.mean(vol == volumes[0])
+        assert agree >= 0.99, f"{spec} and {specs[0]} agree on only {agree:.3%} of voxels"
+
+
 def _run(device, labels, seed, **backend):
     params = MLParams(neighborhood=5, scales=2)
     return run_ml(labels, (12, 16, 20), params, seed, CLBackend(device, **backend))[0]
