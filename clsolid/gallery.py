@@ -339,7 +339,7 @@ _ENTRIES = (
                  "bicontinuous porous medium, 50 % pores (sandstone, sintered or spinodal structure)",
                  _BINARY_PORE, 101, "thresholded Gaussian random field at its median", _porous50),
     GalleryEntry("porous80", "categorical",
-                 "80 % solid with 20 % pores of overlapping discs (porous ceramic, foam)",
+                 "about 80 % solid and 20 % pores of overlapping discs (porous ceramic, foam)",
                  _BINARY_PORE, 102, "Boolean model of discs, radius 2-5 px at 64", _porous80),
     GalleryEntry("inclusions", "categorical",
                  "sparse inclusions, about 3 % (precipitates, voids or second-phase particles in a matrix)",
