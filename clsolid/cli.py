@@ -192,7 +192,7 @@ def cmd_synth(args) -> int:
             "command": " ".join(sys.argv), "written_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
     sidecar.write_text(json.dumps(meta, indent=2, default=float))
     if args.preview is not None:
-        params = MLParams(**{k: v for k, v in result.params.items() if k in MLParams.__dataclass_fields__})
+        params = MLParams.from_dict(result.params)
         save_preview(args.preview, result.exemplar, result.volume, constrained=params.view_names,
                      depths=preview_depths(result.volume.shape, params))
     if args.track is not None:

@@ -147,6 +147,11 @@ class MLParams:
     def heuristic_code(self) -> int:
         return HEURISTICS[self.heuristic][0]
 
+    @classmethod
+    def from_dict(cls, d: dict) -> "MLParams":
+        """The parameters recorded by :meth:`to_dict` (e.g. ``SynthesisResult.params``); other keys are ignored."""
+        return cls(**{k: d[k] for k in cls.__dataclass_fields__ if k in d})
+
     def to_dict(self) -> dict:
         d = asdict(self)
         d["bandwidth"] = list(self.bandwidth) if self.bandwidth else None

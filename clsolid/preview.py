@@ -33,7 +33,7 @@ def view_slice(volume: np.ndarray, view: str, depth: int) -> np.ndarray:
     return volume[:, depth, :]
 
 
-def _grey8(panels: list[np.ndarray]) -> list[np.ndarray]:
+def grey8(panels: list[np.ndarray]) -> list[np.ndarray]:
     """Every panel through one linear scale, the joint min to black and max to white."""
     lo = min(float(p.min()) for p in panels)
     hi = max(float(p.max()) for p in panels)
@@ -93,17 +93,21 @@ class Preview:
 
 
 def render_preview(exemplar: np.ndarray, volume: np.ndarray, *, depths: dict[str, int] | None = None,
-                   constrained: Sequence[str] = ("front", "right")) -> Preview:
-    """Lay out the labelled preview of :func:`save_preview` without writing it."""
+                   constrained: Sequence[str] = ("front", "right"), name: str = "exemplar",
+                   min_side: int = PREVIEW_MIN_SIDE) -> Preview:
+    """Lay out the labelled preview of :func:`save_preview` without writing it.
+
+    *name* starts the exemplar's caption; *min_side* is the smallest long side of a panel.
+    """
     ex, vol = _check_inputs(exemplar, volume)
     chosen = _depths(vol, depths)
-    captions = [f"exemplar {ex.shape[0]}x{ex.shape[1]}"]
+    captions = [f"{name} {ex.shape[0]}x{ex.shape[1]}"]
     raw = [ex]
     for view, axis in DEPTH_AXIS.items():
         raw.append(view_slice(vol, view, chosen[view]))
         mark = ", constrained" if view in constrained else ""
         captions.append(f"{view} {_AXIS_LETTER[axis]}={chosen[view]}{mark}")
-    panels = [enlarge(panel) for panel in _grey8(raw)]
+    panels = [enlarge(panel, min_side) for panel in grey8(raw)]
     font = _font()
     measure = ImageDraw.Draw(Image.new("L", (1, 1)))
     widths = [max(panel.shape[1], int(measure.textlength(c, font=font)) + 4) for panel, c in zip(panels, captions)]

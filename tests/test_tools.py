@@ -28,3 +28,28 @@ def test_compare_devices_reports_each_pair(capsys, tool):
         sys.path.pop(0)
     out = capsys.readouterr().out
     assert "seed 1" in out and ("identical voxels" in out or "nothing to compare" in out)
+
+
+def test_gallery_writes_table_json_and_montage(capsys, device, tmp_path, tool):
+    import json
+
+    from PIL import Image
+
+    gallery = tool("gallery")
+    assert gallery.main(["--names", "porous80", "hrtem", "--shape", "16", "--set", "neighborhood=3",
+                         "--set", "scales=1", "--device", device.device.name.strip()[:8],
+                         "-o", str(tmp_path)]) == 0
+    progress = capsys.readouterr().err
+    assert "porous80 seed 1:" in progress and "hrtem seed 1:" in progress
+    table = (tmp_path / "gallery.md").read_text()
+    rows = [line for line in table.splitlines() if line.startswith("| ") and "exemplar" not in line]
+    assert [r.split("|")[1].strip() for r in rows] == ["porous80", "hrtem"]
+    assert "every phase within 3 pp: " in table and "mirror <= 0.1: " in table
+    report = json.loads((tmp_path / "gallery.json").read_text())
+    run = report["runs"]["porous80"][0]
+    assert run["phase_error_pp"] >= 0 and report["runs"]["hrtem"][0]["phase_error_pp"] is None
+    assert set(run["scores"]) == {"front", "right", "top"} and set(run["mirror"]) == {"zx"}
+    assert 0 <= run["copy"]["fraction"] <= 1 and run["seconds"] > 0
+    with Image.open(tmp_path / "montage.png") as png:
+        width, height = png.size
+    assert height >= 2 * 128 and width >= 4 * 128

@@ -4,7 +4,9 @@ Views of a (Z, Y, X) volume: ``front`` = the (y, x) planes ``volume[z]``; ``righ
 (z, y) planes ``volume[:, :, x].T`` (rows = y, columns = z); ``top`` = the (z, x) planes
 ``volume[:, y, :]`` (rows = z, columns = x). :func:`evaluate` computes every metric per view,
 each distance with a floor (two halves of the exemplar) and a ceiling (shuffled pixels or
-noise), and says where a distance cannot tell these apart. The building blocks are public
+noise), and says where a distance cannot tell these apart. :func:`mirror_correlation` and
+:func:`max_copy_fraction` catch what slice statistics miss: a volume mirrored across the
+views' shared axis, and slices copied from the exemplar. The building blocks are public
 so that tests and the engine can use them directly.
 """
 
@@ -17,6 +19,7 @@ from .orientation import (OrientationField, dominant_orientation_deg, orientatio
                           orientation_histogram, structure_tensor_orientation)
 from .patches import patch_distance
 from .phases import chord_lengths, lineal_path, two_point_correlation, volume_fractions
+from .symmetry import CopyMatch, match_counts, max_copy_fraction, mirror_correlation, mirror_correlations
 
 __all__ = [
     "VIEWS", "evaluate", "view_slices", "first_order_stats", "quantise", "histogram_distance",
@@ -24,5 +27,6 @@ __all__ = [
     "structure_tensor_orientation", "OrientationField", "orientation_histogram",
     "dominant_orientation_deg", "orientation_distance", "trace_fringes", "Fringes",
     "fringe_distances", "patch_distance", "volume_fractions", "two_point_correlation",
-    "lineal_path", "chord_lengths",
+    "lineal_path", "chord_lengths", "mirror_correlation", "mirror_correlations", "max_copy_fraction",
+    "CopyMatch", "match_counts",
 ]

@@ -1,0 +1,275 @@
+"""Judge a synthesis method on the gallery of exemplars (clsolid.gallery).
+
+Grows one cube per exemplar and seed, then measures, with clsolid.metrics: the largest
+phase-fraction error (percentage points, categorical exemplars), the calibrated
+histogram, patch, autocorrelation and (categorical) S2 scores in the front, right and
+top views (0: as close as two halves of the exemplar, 1: no structure), the mirror
+correlation (x <-> z with 2 views; every pair of axes with 3), the largest fraction of
+any slice identical to a shifted window of the exemplar, and the time. Writes, in OUTDIR:
+gallery.md (a table and how many exemplars meet each target), gallery.json (every
+number) and montage.png (each exemplar beside a front, right and top slice taken away
+from the +in slices). With several seeds every cell shows the worst seed.
+
+    python tools/gallery.py -o out/gallery                        # every exemplar, 64^2 -> 48^3
+    python tools/gallery.py --names porous50 hrtem --size 128 --shape 64 -o out/g128
+    python tools/gallery.py --seeds 1 2 --set neighborhood=7 --set views=3 -o out/g7
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import importlib.util
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from PIL import Image
+
+import clsolid
+from clsolid import metrics
+from clsolid.gallery import SIZES, gallery_exemplar, gallery_info, gallery_names
+from clsolid.metrics._common import jsonable
+from clsolid.metrics.symmetry import AXIS_PAIRS
+from clsolid.params import VIEW_SETS, MLParams
+from clsolid.preview import render_preview
+from clsolid.synth import inserted_depths, preview_depths
+
+VIEWS = metrics.VIEWS
+#: The calibrated scores reported per view: (key in clsolid.metrics.evaluate, column title).
+SCORES = (("histogram_kl", "hist"), ("patch_sw", "patch"), ("autocorrelation_l2", "autocorr"), ("s2_l2", "S2"))
+#: Targets of issue 10: (key, label, limit, whether the value must stay strictly below it).
+TARGETS = (
+    ("phase_error_pp", "every phase within 3 pp", 3.0, False),
+    ("histogram_kl", "histogram <= 0.1", 0.1, False),
+    ("patch_sw", "patch <= 0.3", 0.3, False),
+    ("autocorrelation_l2", "autocorrelation <= 0.3", 0.3, False),
+    ("mirror", "mirror <= 0.1", 0.1, False),
+    ("copy", "no slice >= 90 % copied", 0.9, True),
+)
+REFERENCE_REPEATS = 3
+#: Smallest long side, in pixels, of a montage panel.
+PANEL_MIN = 128
+
+
+@functools.cache
+def _quality_ml() -> Any:
+    """tools/quality_ml.py, loaded from beside this file (tools/ is not a package)."""
+    spec = importlib.util.spec_from_file_location("quality_ml", Path(__file__).with_name("quality_ml.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _parse_setting(text: str) -> tuple[str, object]:
+    """``name=value``, parsed as tools/quality_ml.py parses it."""
+    return _quality_ml().parse_setting(text)
+
+
+# ----------------------------------------------------------------------------- one run
+
+
+def level_indices(res: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The volume and the exemplar of a result, both in level indices (phases, for categorical ones)."""
+    return res.labels, res.exemplar_labels
+
+
+def inserted(res: Any) -> dict[str, np.ndarray]:
+    """Depths of the ``+in`` slices of every view of a result (none for an unconstrained view)."""
+    depths = inserted_depths(res.labels.shape, MLParams.from_dict(res.params))
+    return {view: depths.get(view, np.zeros(0, int)) for view in VIEWS}
+
+
+def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
+    """Every number of the gallery for one synthesis result (phase fractions if ``categorical``)."""
+    params = res.params
+    vol, ex = level_indices(res)
+    constrained = VIEW_SETS[params["views"]]
+    report = metrics.evaluate(ex, vol, views=VIEWS, constrained=constrained,
+                              reference_repeats=REFERENCE_REPEATS, rng=0)
+    scores = {v: {key: None for key, _ in SCORES} for v in VIEWS}
+    for row in report["summary"]:
+        if row["metric"] in scores[row["view"]]:
+            scores[row["view"]][row["metric"]] = row["score"]
+    pairs = [(0, 2)] if params["views"] == 2 else AXIS_PAIRS
+    mirror = metrics.mirror_correlations(vol, pairs)
+    copy = metrics.max_copy_fraction(vol, ex, VIEWS)
+    slices = inserted(res)
+    out: dict[str, Any] = {
+        "seconds": seconds, "constrained": list(constrained), "scores": scores,
+        "mirror": mirror, "mirror_max": max((r for r in mirror.values() if np.isfinite(r)), default=None),
+        "copy": {"fraction": copy.fraction, "view": copy.view, "index": copy.index, "shift": list(copy.shift),
+                 "inserted": bool(copy.index in slices[copy.view])},
+        "inserted_depths": {v: d.tolist() for v, d in slices.items()},
+        "phase_error_pp": None, "fractions": None,
+    }
+    if categorical:
+        both = np.union1d(np.unique(ex), np.unique(vol))
+        f_ex = np.array([np.mean(ex == v) for v in both])
+        f_vol = np.array([np.mean(vol == v) for v in both])
+        out["phase_error_pp"] = float(100.0 * np.abs(f_ex - f_vol).max())
+        out["fractions"] = {"levels": both.tolist(), "exemplar": f_ex.tolist(), "volume": f_vol.tolist()}
+    return out
+
+
+def run_one(name: str, size: int, shape: int, seed: int, method: str, options: dict,
+            device: Any) -> tuple[dict[str, Any], Any]:
+    """Synthesise one exemplar with one seed and measure it."""
+    image = gallery_exemplar(name, size)
+    t = time.perf_counter()
+    res = clsolid.synthesize(image, (shape,) * 3, method=method, rng=seed, device=device, full_output=True,
+                             **options)
+    seconds = time.perf_counter() - t
+    categorical = gallery_info(name).kind == "categorical"
+    return {"name": name, "seed": seed, **measure(res, seconds, categorical)}, res
+
+
+# ----------------------------------------------------------------------------- summary
+
+
+def _worst(values: list) -> float | None:
+    defined = [v for v in values if v is not None]
+    return max(defined) if defined else None
+
+
+def summarise(runs: list[dict]) -> dict[str, Any]:
+    """One exemplar's runs (seeds) reduced to their worst value for every number."""
+    first = runs[0]
+    return {
+        "phase_error_pp": _worst([r["phase_error_pp"] for r in runs]),
+        "scores": {v: {k: _worst([r["scores"][v][k] for r in runs]) for k, _ in SCORES} for v in VIEWS},
+        "mirror": _worst([r["mirror_max"] for r in runs]),
+        "copy": max((r["copy"] for r in runs), key=lambda c: c["fraction"]),
+        "seconds": float(np.mean([r["seconds"] for r in runs])),
+        "constrained": first["constrained"],
+    }
+
+
+def meets(row: dict, key: str, limit: float, strict: bool) -> bool | None:
+    """Whether one exemplar meets one target (None: not measurable or not applicable)."""
+    if key in ("histogram_kl", "patch_sw", "autocorrelation_l2"):
+        values = [row["scores"][v][key] for v in row["constrained"]]
+        if any(v is None for v in values):
+            return None
+        value = max(values)
+    elif key == "copy":
+        value = row["copy"]["fraction"]
+    else:
+        value = row[key]
+    if value is None:
+        return None
+    return value < limit if strict else value <= limit
+
+
+def _fmt(x: float | None, digits: int = 2) -> str:
+    return "–" if x is None else f"{x:.{digits}f}"
+
+
+def markdown(rows: dict[str, dict], settings: dict) -> str:
+    """The table of the gallery, and how many exemplars meet each target."""
+    lines = [
+        f"Gallery: method `{settings['method']}`, exemplars {settings['size']}², volumes "
+        f"{settings['shape']}³, seeds {settings['seeds']}, settings {settings['options'] or 'defaults'}, "
+        f"device {settings['device']}.",
+        "",
+        "Scores (F/R/T = front/right/top view): 0 = as close as two halves of the exemplar, 1 = no "
+        "structure; – = not measurable for this exemplar. Phase err: largest phase-fraction error, "
+        "percentage points. Mirror: correlation with the x↔z mirror after removing each y-plane's "
+        "mean (the largest over axis pairs with 3 views). Copy: largest fraction of a slice equal to a "
+        "shifted exemplar window, with the slice (view and depth; +in: an inserted slice)."
+        + (" Each cell is the worst seed; time is the mean." if len(settings["seeds"]) > 1 else ""),
+        "",
+        "| exemplar | kind | phase err | " + " | ".join(f"{title} F/R/T" for _, title in SCORES)
+        + " | mirror | copy | time (s) |",
+        "|---" * (6 + len(SCORES)) + "|",
+    ]
+    for name, row in rows.items():
+        info = gallery_info(name)
+        kind = f"{len(info.phases)} phases" if info.kind == "categorical" else "grey"
+        cells = ["/".join(_fmt(row["scores"][v][key]) for v in VIEWS) for key, _ in SCORES]
+        c = row["copy"]
+        copy = f"{c['fraction']:.2f} {c['view'][0].upper()}{c['index']}{' +in' if c['inserted'] else ''}"
+        lines.append(f"| {name} | {kind} | {_fmt(row['phase_error_pp'], 1)} | " + " | ".join(cells)
+                     + f" | {_fmt(row['mirror'])} | {copy} | {row['seconds']:.1f} |")
+    lines += ["", "Targets met (scores in the constrained views):", ""]
+    for key, label, limit, strict in TARGETS:
+        verdicts = [meets(row, key, limit, strict) for row in rows.values()]
+        judged = [v for v in verdicts if v is not None]
+        left = len(verdicts) - len(judged)
+        why = "grey, not applicable" if key == "phase_error_pp" else "not measurable"
+        lines.append(f"- {label}: {sum(judged)}/{len(judged)}" + (f" ({left} {why})" if left else ""))
+    return "\n".join(lines) + "\n"
+
+
+def montage(path: Path, rows: list[np.ndarray]) -> None:
+    """Stack the previews of the exemplars (one row each), left-aligned on white."""
+    width = max(r.shape[1] for r in rows)
+    padded = [np.pad(r, ((0, 0), (0, width - r.shape[1])), constant_values=255) for r in rows]
+    Image.fromarray(np.vstack(padded)).save(path, format="PNG")
+
+
+def montage_row(name: str, res: Any) -> np.ndarray:
+    """The exemplar beside a front, right and top slice, each away from the ``+in`` slices."""
+    params = MLParams.from_dict(res.params)
+    return render_preview(res.exemplar_labels, res.labels, depths=preview_depths(res.labels.shape, params),
+                          constrained=params.view_names, name=name, min_side=PANEL_MIN).image
+
+
+# ----------------------------------------------------------------------------- main
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--names", nargs="+", choices=gallery_names(), default=list(gallery_names()),
+                    metavar="NAME", help=f"exemplars (default: all of {', '.join(gallery_names())})")
+    ap.add_argument("--size", type=int, choices=SIZES, default=64, help="exemplar side (default 64)")
+    ap.add_argument("--shape", type=int, default=48, metavar="N", help="cube side of the volumes (default 48)")
+    ap.add_argument("--seeds", nargs="+", type=int, default=[1], help="seeds (default 1)")
+    ap.add_argument("--method", default="ml", help="synthesis method (default ml)")
+    ap.add_argument("--set", dest="settings", action="append", type=_parse_setting, default=[],
+                    metavar="NAME=VALUE", help="a synthesize() keyword, repeatable")
+    ap.add_argument("--device", default=None, help="OpenCL device (default: clsolid's choice)")
+    ap.add_argument("-o", "--outdir", type=Path, required=True, help="folder for gallery.md/.json and montage.png")
+    args = ap.parse_args(argv)
+    options = dict(args.settings)
+    try:
+        device = args.device if str(args.device).lower() == "reference" else clsolid.select_device(args.device)
+    except clsolid.ClsolidError as err:
+        print(f"gallery: {err}", file=sys.stderr)
+        return 2
+    device_name = device if isinstance(device, str) else device.name
+    settings = {"method": args.method, "size": args.size, "shape": args.shape, "seeds": args.seeds,
+                "options": options, "device": device_name, "version": clsolid.__version__}
+    runs: dict[str, list[dict]] = {}
+    rows_for_montage = []
+    for name in args.names:
+        for seed in args.seeds:
+            t = time.perf_counter()
+            try:
+                run, res = run_one(name, args.size, args.shape, seed, args.method, options, device)
+            except clsolid.ClsolidError as err:
+                print(f"gallery: {name} seed {seed}: {err}", file=sys.stderr)
+                return 2
+            runs.setdefault(name, []).append(run)
+            if seed == args.seeds[0]:
+                rows_for_montage.append(montage_row(name, res))
+            c = run["copy"]
+            print(f"{name} seed {seed}: {run['seconds']:.1f} s synthesis, {time.perf_counter() - t:.1f} s in all; "
+                  f"phase err {_fmt(run['phase_error_pp'], 1)} pp, mirror {_fmt(run['mirror_max'])}, "
+                  f"copy {c['fraction']:.2f} ({c['view']} {c['index']})", file=sys.stderr, flush=True)
+    rows = {name: summarise(r) for name, r in runs.items()}
+    args.outdir.mkdir(parents=True, exist_ok=True)
+    (args.outdir / "gallery.md").write_text(markdown(rows, settings), encoding="utf-8")
+    (args.outdir / "gallery.json").write_text(
+        json.dumps(jsonable({"settings": settings, "exemplars": rows, "runs": runs}), indent=1),
+        encoding="utf-8")
+    montage(args.outdir / "montage.png", rows_for_montage)
+    print(f"wrote {args.outdir / 'gallery.md'}, gallery.json and montage.png", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
