@@ -18,7 +18,7 @@ METHODS = ("ml",)
 OUTPUTS = ("values", "labels")
 PLANNED_METHODS = ("wl", "kopf", "chen-wang")
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
-               "initial_temperature", "bandwidth", "bandwidth_factor")
+               "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch")
 
 
@@ -120,7 +120,9 @@ def synthesize(
         ``upsampling`` (``"1/8"`` or ``"8/8"``), ``inherited`` (``"resynthesize"`` with t held
         at 0, or ``"fixed"``), ``insert_slices`` (exemplar slices tiled onto this many slices
         of each constrained view at the start and trusted (t = 0), the thesis's ``+in``; default 4;
-        0 gives the ``-in`` start, which collapses to the mode under ICM),
+        0 gives the ``-in`` start, which collapses to the mode under ICM), ``slice_layout``
+        (``"aligned"``: the same depths and tiling in every view; ``"staggered"``: each
+        view's slices between the other's, each with its own seeded shift of the exemplar),
         ``initial_temperature`` (1),
         ``bandwidth`` (Parzen h, one value or one per scale finest first; default
         ``bandwidth_factor`` x Silverman's rule per scale), ``bandwidth_factor`` (multiplies

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
-from .params import DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, UPSAMPLING, MLParams
+from .params import DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, SLICE_LAYOUTS, UPSAMPLING, MLParams
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
 _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
@@ -58,6 +58,9 @@ def _add_synth(sub) -> None:
                    help="voxels from the coarser scale: re-synthesised with t=0, or fixed (default %(default)s)")
     p.add_argument("--insert-slices", type=int, default=d.insert_slices,
                    help="exemplar slices inserted per constrained view, trusted (+in; default %(default)s); 0 = noise only (-in)")
+    p.add_argument("--slice-layout", choices=SLICE_LAYOUTS, default=d.slice_layout,
+                   help="+in slices at the same depths and tiling in every view, or staggered between "
+                        "views with seeded shifts (default %(default)s)")
     p.add_argument("--initial-temperature", type=float, default=d.initial_temperature,
                    help="temperature of non-trusted voxels at the start of a scale (default %(default)s, the thesis)")
     p.add_argument("--bandwidth", type=float, nargs="+", default=None,
@@ -164,6 +167,7 @@ def cmd_synth(args) -> int:
         voxel_size = args.voxel_size[0] if len(args.voxel_size) == 1 else tuple(args.voxel_size)
     options = dict(pyramid=args.pyramid, xi=args.xi, stop_fraction=args.stop_fraction, max_sweeps=args.max_sweeps,
                    upsampling=args.upsampling, inherited=args.inherited, insert_slices=args.insert_slices,
+                   slice_layout=args.slice_layout,
                    initial_temperature=args.initial_temperature, builtin_size=args.builtin_size)
     for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale
         values = getattr(args, name)

@@ -37,6 +37,10 @@ DEPTH_AXIS: dict[str, int] = {"front": 0, "right": 2, "top": 1}
 VIEW_SETS: dict[int, tuple[str, ...]] = {2: ("front", "right"), 3: ("front", "right", "top")}
 
 UPSAMPLING = ("1/8", "8/8")
+#: Where the +in slices go. "aligned": the same depths and tiling in every view (so the start,
+#: and after ICM's first sweep the whole block, is its own x<->z mirror image); "staggered":
+#: each view's slices between the other's, each showing the exemplar at its own seeded shift.
+SLICE_LAYOUTS = ("aligned", "staggered")
 INHERITED = ("resynthesize", "fixed")
 #: How the exemplar of each coarser scale is made. "binomial" low-passes with [1 2 1]/4 before
 #: keeping the even pixels (a Gaussian pyramid, thesis ch. 3); "decimate" keeps them unfiltered
@@ -90,6 +94,7 @@ class MLParams:
     upsampling: str = "1/8"
     inherited: str = "resynthesize"
     insert_slices: int = 4
+    slice_layout: str = "aligned"
     initial_temperature: float = 1.0
     bandwidth_factor: float | tuple[float, ...] | None = None
     bandwidth: tuple[float, ...] | None = field(default=None)
@@ -113,6 +118,7 @@ class MLParams:
         _choice("upsampling", self.upsampling, UPSAMPLING)
         _choice("inherited", self.inherited, INHERITED)
         _int_in("insert_slices", self.insert_slices, 0)
+        _choice("slice_layout", self.slice_layout, SLICE_LAYOUTS)
         t0 = self.initial_temperature
         if not (isinstance(t0, numbers.Real) and 0 < t0 <= 1):
             raise InputError(f"initial_temperature={t0!r} must be in (0, 1] (1 = no confidence, the thesis)")

@@ -115,10 +115,19 @@ def check_shape(shape) -> tuple[int, int, int]:
     return out
 
 
-def slice_depths(size: int, count: int, step: int) -> np.ndarray:
-    """*count* evenly spaced depths on multiples of *step* (so they survive decimation)."""
+def slice_depths(size: int, count: int, step: int, offset: float = 0.0) -> np.ndarray:
+    """*count* evenly spaced depths on multiples of *step* (so they survive decimation).
+
+    *offset* shifts them by that fraction of their spacing (wrapping around).
+    """
     slots = max(1, -(-size // step))
-    return np.unique(np.linspace(0, slots, count, endpoint=False).astype(int)) * step
+    spaced = np.linspace(0, slots, count, endpoint=False) + offset * slots / count
+    return np.unique(spaced.astype(int) % slots) * step
+
+
+def _view_offset(params: MLParams, view: str) -> float:
+    """Where a view's ``+in`` slices sit between the front view's: staggered, view i of n at i/n."""
+    return params.view_names.index(view) / params.views if params.slice_layout == "staggered" else 0.0
 
 
 def inserted_depths(shape: tuple[int, int, int], params: MLParams) -> dict[str, np.ndarray]:
@@ -126,7 +135,8 @@ def inserted_depths(shape: tuple[int, int, int], params: MLParams) -> dict[str, 
     if params.insert_slices == 0:
         return {view: np.empty(0, int) for view in params.view_names}
     step = 2 ** (params.scales - 1)
-    return {view: slice_depths(shape[DEPTH_AXIS[view]], params.insert_slices, step) for view in params.view_names}
+    return {view: slice_depths(shape[DEPTH_AXIS[view]], params.insert_slices, step, _view_offset(params, view))
+            for view in params.view_names}
 
 
 def far_depth(size: int, taken: np.ndarray) -> int:
@@ -146,38 +156,45 @@ def preview_depths(shape: tuple[int, int, int], params: MLParams) -> dict[str, i
     return {view: far_depth(shape[a], taken.get(view, np.empty(0, int))) for view, a in DEPTH_AXIS.items()}
 
 
-def insert_slices(vol: np.ndarray, labels_img: np.ndarray, views: tuple[str, ...], count: int, step: int) -> np.ndarray:
-    """``+in``: tile the exemplar onto *count* slices of each constrained view.
+def insert_slices(vol: np.ndarray, labels_img: np.ndarray, params: MLParams, level: int, seed: int) -> np.ndarray:
+    """``+in``: tile the exemplar onto ``params.insert_slices`` slices of each constrained view.
 
-    Called at every scale with that scale's exemplar and *step* = 2^(scales-1-level):
-    the depths are the full-resolution ones halved, so each slice persists from the
-    coarsest scale down. Returns the mask of inserted voxels; they start each scale
-    trusted (t = 0), like inherited voxels: under ICM a voxel at t = 1 ignores its
-    neighbours, so untrusted slices would be overwritten unseen.
+    Called at every scale with that scale's exemplar: the depths and tile shifts are the
+    full-resolution ones divided by 2^level (all multiples of 2^(scales-1)), so each slice
+    persists from the coarsest scale down. With ``slice_layout="staggered"`` the views'
+    slices sit at different depths and each shows the exemplar shifted by its own seeded
+    offset, so that nothing maps the x axis onto z. Returns the mask of inserted voxels;
+    they start each scale trusted (t = 0), like inherited voxels: under ICM a voxel at
+    t = 1 ignores its neighbours, so untrusted slices would be overwritten unseen.
     """
     mask = np.zeros(vol.shape, bool)
-    if count == 0:
+    if params.insert_slices == 0:
         return mask
-    Z, Y, X = vol.shape
+    step = 2 ** (params.scales - 1 - level)
+    shift_rng = np.random.default_rng([seed, 0x1A5E])  # the same draws at every scale
+    ex_slots = [-(-n // step) for n in labels_img.shape]
 
     def tiled(rows: int, cols: int) -> np.ndarray:
-        reps = (-(-rows // labels_img.shape[0]), -(-cols // labels_img.shape[1]))
-        return np.tile(labels_img, reps)[:rows, :cols]
+        shift = [0, 0]
+        if params.slice_layout == "staggered":
+            shift = [int(shift_rng.integers(0, n)) * step for n in ex_slots]
+        reps = (-(-(rows + shift[0]) // labels_img.shape[0]), -(-(cols + shift[1]) // labels_img.shape[1]))
+        return np.tile(labels_img, reps)[shift[0]: shift[0] + rows, shift[1]: shift[1] + cols]
 
-    for view in views:
-        if view == "front":
-            for z in slice_depths(Z, count, step):
-                vol[z], mask[z] = tiled(Y, X), True
-        elif view == "right":
-            for x in slice_depths(X, count, step):
-                vol[:, :, x], mask[:, :, x] = tiled(Y, Z).T, True
-        else:
-            for y in slice_depths(Y, count, step):
-                vol[:, y, :], mask[:, y, :] = tiled(Z, X), True
+    Z, Y, X = vol.shape
+    for view in params.view_names:
+        depths = slice_depths(vol.shape[DEPTH_AXIS[view]], params.insert_slices, step, _view_offset(params, view))
+        for d in depths:
+            if view == "front":
+                vol[d], mask[d] = tiled(Y, X), True
+            elif view == "right":
+                vol[:, :, d], mask[:, :, d] = tiled(Y, Z).T, True
+            else:
+                vol[:, d, :], mask[:, d, :] = tiled(Z, X), True
     return mask
 
 
-def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, params: MLParams):
+def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, params: MLParams, seed: int = 0):
     """Volume and temperatures at the start of a scale (§2.7); t = 0 marks trusted voxels.
 
     The random start *base* (full resolution) is decimated; the coarser scale's result is
@@ -194,8 +211,7 @@ def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, 
             vol[::2, ::2, ::2] = coarse
         # Only the voxel at the even corner is inherited (t = 0), under 1/8 and 8/8 alike.
         temp[::2, ::2, ::2] = 0.0
-    inserted = insert_slices(vol, model.exemplar, params.view_names, params.insert_slices,
-                             2 ** (params.scales - 1 - model.level))
+    inserted = insert_slices(vol, model.exemplar, params, model.level, seed)
     temp[inserted] = 0.0
     return vol, temp
 
@@ -258,7 +274,7 @@ def run_ml(
     timings: dict = {"scales": []}
     for i, model in enumerate(models):
         t_scale = time.perf_counter()
-        vol, temp = start_state(model, base, coarse, params)
+        vol, temp = start_state(model, base, coarse, params, seed)
         inherited = temp == 0
         backend.start_scale(model, vol, temp, params)
         t_init = float(temp.sum())

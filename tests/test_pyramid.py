@@ -8,7 +8,7 @@ from clsolid.errors import InputError
 from clsolid.ml_model import build_scale, scale_exemplar
 from clsolid.params import MLParams
 from clsolid.reference import ReferenceBackend
-from clsolid.synth import run_ml, slice_depths
+from clsolid.synth import inserted_depths, run_ml, slice_depths
 
 
 def _binomial_reference(labels: np.ndarray, level: int) -> np.ndarray:
@@ -86,3 +86,46 @@ def test_inserted_slices_show_each_scale_exemplar(brick_labels, pyramid):
         for x in right:
             np.testing.assert_array_equal(vol[:, :, x].T, ex[:Y, :Z])
             assert (temp[:, :, x] == 0).all()
+
+
+def _shift_of(slice_, exemplar, step, cols):
+    """The (row, col) shift, in multiples of *step*, at which *slice_* is the tiled exemplar (on *cols*)."""
+    reps = (-(-(slice_.shape[0] + exemplar.shape[0]) // exemplar.shape[0]),
+            -(-(slice_.shape[1] + exemplar.shape[1]) // exemplar.shape[1]))
+    tile = np.tile(exemplar, reps)
+    rows = slice_.shape[0]
+    for r in range(0, exemplar.shape[0], step):
+        for c in range(0, exemplar.shape[1], step):
+            if np.array_equal(tile[r:r + rows, c:c + slice_.shape[1]][:, cols], slice_[:, cols]):
+                return r // step, c // step
+    return None
+
+
+def test_staggered_slices_break_the_x_z_symmetry_consistently_across_scales(brick_labels):
+    """Staggered +in: the views' slices at different depths, each with its own shift, the same at every scale."""
+    params = MLParams(neighborhood=3, scales=3, insert_slices=2, max_sweeps=1, slice_layout="staggered")
+    starts = []
+
+    class Spy(ReferenceBackend):
+        def start_scale(self, model, vol, temp, p):
+            starts.append((model, vol.copy(), temp.copy()))
+            super().start_scale(model, vol, temp, p)
+
+    shape = (16, 24, 16)
+    run_ml(brick_labels[:32, :32], shape, params, 5, Spy())
+    depths = inserted_depths(shape, params)
+    assert depths["front"].tolist() == [0, 8] and depths["right"].tolist() == [4, 12]
+    shifts = []
+    for model, vol, temp in starts:
+        step = 2 ** (params.scales - 1 - model.level)
+        xs, zs = depths["right"] // 2**model.level, depths["front"] // 2**model.level
+        Z, Y, X = model.shape
+        # where slices of the two views cross, the right view (written last) wins
+        found = [_shift_of(vol[z], model.exemplar, step, np.setdiff1d(np.arange(X), xs)) for z in zs]
+        found += [_shift_of(vol[:, :, x].T, model.exemplar, step, np.arange(Z)) for x in xs]
+        assert all(f is not None for f in found)
+        shifts.append(found)
+        assert all((temp[z] == 0).all() for z in zs) and all((temp[:, :, x] == 0).all() for x in xs)
+    assert shifts[0] == shifts[1] == shifts[2]  # the same full-resolution shifts at every scale
+    assert len(set(shifts[0])) > 1  # slices show different parts of the exemplar
+    assert not np.array_equal(inserted_depths(shape, MLParams())["front"], depths["right"])
