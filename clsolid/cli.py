@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
-from .params import DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, UPSAMPLING, MLParams
+from .params import DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, RELAXATIONS, UPSAMPLING, MLParams
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
 _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
@@ -68,6 +68,18 @@ def _add_synth(sub) -> None:
     p.add_argument("--bandwidth-factor", type=float, nargs="+", default=None,
                    help="multiply Silverman's bandwidth: one factor, or one per scale finest first "
                         f"(default {DEFAULT_BANDWIDTH_FACTOR}; 1 = the thesis)")
+    p.add_argument("--relaxation", choices=RELAXATIONS, default=d.relaxation,
+                   help="argmax (icm, the thesis), a draw from the LCPDF (gibbs), or TIP14's simulated "
+                        "annealing (default %(default)s)")
+    p.add_argument("--anneal-start", type=float, default=d.anneal_start,
+                   help="annealing: initial global temperature t_in of every scale (default %(default)s)")
+    p.add_argument("--anneal-cooling", type=float, default=d.anneal_cooling,
+                   help="annealing: t_in is multiplied by this after every sweep (default %(default)s)")
+    p.add_argument("--sweeps", type=int, default=d.sweeps,
+                   help="exactly this many sweeps per scale (default: stop on the temperature rule)")
+    p.add_argument("--balance", type=float, default=d.balance,
+                   help="weight beta of the label-histogram balance term beta*log(exemplar/volume fraction) "
+                        "(default %(default)s = off)")
     p.add_argument("--builtin-size", type=int, default=64, help="side of a built-in exemplar (default 64)")
     p.add_argument("--seed", type=int, default=None, help="random seed (default: fresh, recorded in the sidecar)")
     p.add_argument("--device", default=None,
@@ -161,7 +173,9 @@ def cmd_synth(args) -> int:
         voxel_size = args.voxel_size[0] if len(args.voxel_size) == 1 else tuple(args.voxel_size)
     options = dict(pyramid=args.pyramid, xi=args.xi, stop_fraction=args.stop_fraction, max_sweeps=args.max_sweeps,
                    upsampling=args.upsampling, inherited=args.inherited, insert_slices=args.insert_slices,
-                   initial_temperature=args.initial_temperature, builtin_size=args.builtin_size)
+                   initial_temperature=args.initial_temperature, builtin_size=args.builtin_size,
+                   relaxation=args.relaxation, anneal_start=args.anneal_start, anneal_cooling=args.anneal_cooling,
+                   sweeps=args.sweeps, balance=args.balance)
     for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale
         values = getattr(args, name)
         if values is not None:
