@@ -55,7 +55,8 @@ def _add_synth(sub) -> None:
     p.add_argument("--stop-fraction", type=float, default=d.stop_fraction,
                    help="stop a scale when the global temperature fell by this fraction (default %(default)s)")
     p.add_argument("--max-sweeps", type=int, default=d.max_sweeps, help="most sweeps per scale (default %(default)s)")
-    p.add_argument("--upsampling", choices=UPSAMPLING, default=d.upsampling, help="coarse-to-fine copy (default %(default)s)")
+    p.add_argument("--upsampling", choices=UPSAMPLING, default=None,
+                   help="coarse-to-fine copy (default 1/8; 8/8 under --relaxation annealing, as TIP14)")
     p.add_argument("--inherited", choices=INHERITED, default=d.inherited,
                    help="voxels from the coarser scale: re-synthesised with t=0, or fixed (default %(default)s)")
     p.add_argument("--insert-slices", type=int, default=d.insert_slices,

@@ -95,7 +95,7 @@ class MLParams:
     xi: float = -3.0
     stop_fraction: float = 0.95
     max_sweeps: int = 30
-    upsampling: str = "1/8"
+    upsampling: str | None = None
     inherited: str = "resynthesize"
     insert_slices: int = 4
     initial_temperature: float = 1.0
@@ -123,7 +123,6 @@ class MLParams:
         if not (isinstance(self.stop_fraction, numbers.Real) and 0 < self.stop_fraction <= 1):
             raise InputError(f"stop_fraction={self.stop_fraction!r} must be in (0, 1] (1 = until zero)")
         _int_in("max_sweeps", self.max_sweeps, 1)
-        _choice("upsampling", self.upsampling, UPSAMPLING)
         _choice("inherited", self.inherited, INHERITED)
         _int_in("insert_slices", self.insert_slices, 0)
         t0 = self.initial_temperature
@@ -138,6 +137,9 @@ class MLParams:
         else:
             object.__setattr__(self, "bandwidth_factor", (DEFAULT_BANDWIDTH_FACTOR,) * self.scales)
         _choice("relaxation", self.relaxation, RELAXATIONS)
+        if self.upsampling is None:  # 1/8 for ICM (thesis §5.3.3), 8/8 for annealing (TIP14)
+            object.__setattr__(self, "upsampling", "8/8" if self.relaxation == "annealing" else "1/8")
+        _choice("upsampling", self.upsampling, UPSAMPLING)
         if not (_real(self.anneal_start) and self.anneal_start > 0):
             raise InputError(f"anneal_start={self.anneal_start!r} must be a positive number "
                              "(the initial t_in; 1 = Metropolis on the LCPDF)")

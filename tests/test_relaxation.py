@@ -163,6 +163,14 @@ def test_default_is_icm_and_unchanged(device, small_labels):
     np.testing.assert_array_equal(a, b)
 
 
+def test_upsampling_follows_the_relaxation_unless_given():
+    """1/8 for ICM and Gibbs (thesis), 8/8 for annealing (TIP14), an explicit choice wins."""
+    assert MLParams().upsampling == MLParams(relaxation="gibbs").upsampling == "1/8"
+    assert MLParams(relaxation="annealing").upsampling == "8/8"
+    assert MLParams(relaxation="annealing", upsampling="1/8").upsampling == "1/8"
+    assert MLParams(upsampling="8/8").to_dict()["upsampling"] == "8/8"
+
+
 def test_balance_term():
     model = build_scale(np.repeat(np.arange(4), 16).reshape(8, 8), (4, 4, 4), MLParams(neighborhood=3, scales=1), 0)
     assert np.all(balance_bias(np.zeros((4, 4, 4)), model, 0.0) == 0)
@@ -195,9 +203,10 @@ def test_bad_relaxation_parameters_name_themselves(kwargs, word):
 
 
 @pytest.mark.parametrize("argv, expected", [
-    ([], dict(relaxation="icm", anneal_start=1.0, anneal_cooling=0.8, sweeps=None, balance=0.0)),
+    ([], dict(relaxation="icm", anneal_start=1.0, anneal_cooling=0.8, sweeps=None, balance=0.0, upsampling="1/8")),
     (["--relaxation", "annealing", "--anneal-start", "2", "--anneal-cooling", "0.5", "--sweeps", "2"],
-     dict(relaxation="annealing", anneal_start=2.0, anneal_cooling=0.5, sweeps=2)),
+     dict(relaxation="annealing", anneal_start=2.0, anneal_cooling=0.5, sweeps=2, upsampling="8/8")),
+    (["--relaxation", "annealing", "--upsampling", "1/8"], dict(relaxation="annealing", upsampling="1/8")),
     (["--relaxation", "gibbs", "--balance", "0.5"], dict(relaxation="gibbs", balance=0.5)),
 ])
 def test_cli_relaxation_reaches_the_sidecar(tmp_path, device, argv, expected):
