@@ -18,7 +18,8 @@ METHODS = ("ml",)
 OUTPUTS = ("values", "labels")
 PLANNED_METHODS = ("wl", "kopf", "chen-wang")
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
-               "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor")
+               "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
+               "anneal_start", "anneal_cooling", "sweeps", "balance")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch")
 
 
@@ -57,7 +58,7 @@ def synthesize(
     every voxel takes the grey level that maximises its local conditional probability,
     estimated with a Gaussian Parzen window over every neighbourhood of the exemplar,
     on 2 or 3 orthogonal slices through the voxel; relaxed by ICM with per-voxel
-    temperatures, coarse to fine. Voxels are updated in conflict-free sets, so the
+    temperatures (or a Gibbs sampler, or simulated annealing), coarse to fine. Voxels are updated in conflict-free sets, so the
     result is that of a sequential ICM visiting the sets in a seeded order.
 
     Parameters
@@ -117,8 +118,8 @@ def synthesize(
         pixel unfiltered, as the thesis does: see the README, Quality), ``xi`` (cooling,
         default -3), ``stop_fraction`` (0.95: a scale stops when the global
         temperature has fallen by this fraction, or reaches 0), ``max_sweeps`` (30 per scale),
-        ``upsampling`` (``"1/8"`` or ``"8/8"``), ``inherited`` (``"resynthesize"`` with t held
-        at 0, or ``"fixed"``), ``insert_slices`` (exemplar slices tiled onto this many slices
+        ``upsampling`` (``"1/8"`` or ``"8/8"``; default 1/8, and 8/8 under annealing as in
+        TIP14), ``inherited`` (``"resynthesize"`` with t held at 0, or ``"fixed"``), ``insert_slices`` (exemplar slices tiled onto this many slices
         of each constrained view at the start and trusted (t = 0), the thesis's ``+in``; default 4;
         0 gives the ``-in`` start, which collapses to the mode under ICM), ``slice_layout``
         (``"aligned"``: the same depths and tiling in every view; ``"staggered"``: each
@@ -129,6 +130,25 @@ def synthesize(
         Silverman's h; one value or one per scale finest first; default 0.2, where the
         thesis uses 1: see the README, Quality), ``builtin_size``, and OpenCL tuning: ``vector_width``,
         ``voxels_per_item``, ``local_size``, ``max_batch``.
+
+        Relaxation (thesis_spec §2.3): ``relaxation`` is ``"icm"`` (default, the thesis: each
+        visited voxel takes the argmax), ``"gibbs"`` (it draws its label from the combined,
+        normalised LCPDF; per-voxel temperatures, neighbour weights and stop rule as ICM) or
+        ``"annealing"`` (TIP14 Fig. 1: no voxel temperatures, every neighbour counts fully and
+        every voxel is visited each sweep, trusted ``+in`` and inherited ones included unless
+        ``inherited="fixed"``; a uniformly drawn label lambda replaces x_s if
+        p = P(lambda)/P(x_s) > 1 or p * t_in > q, q ~ U[0, 1), with P the heuristic's combined
+        score). The global temperature t_in starts every scale at ``anneal_start`` (default 1:
+        Metropolis sampling of the LCPDF) and is multiplied by ``anneal_cooling`` (0.8) after each
+        sweep; the scale stops when it has fallen by ``stop_fraction`` (14 sweeps with the
+        defaults) or after ``max_sweeps``. ``sweeps`` fixes the number of sweeps per scale
+        instead, for any relaxation (default None: the stop rule). The h1 heuristics combine
+        per-view solutions: each view's argmax, its own draw, or the proposal where that view
+        alone accepts it. ``balance`` (beta >= 0, default 0 = off) re-weights labels to keep the
+        exemplar's histogram (a departure, as Kopf et al.): before each sweep, beta * log(e / c)
+        is added to each label's log score, e and c being the label fractions of the exemplar at
+        that scale and of the volume (floored at 1e-4). On 32 levels beta = 1 suits Gibbs and
+        annealing, while ICM overshoots at 1 and does better near 0.3.
 
     Returns
     -------

@@ -164,6 +164,20 @@ class CLBackend:
         self.kfactor = np.float32(1.0 / (2.0 * model.bandwidth**2))
         self._temp = np.empty(model.shape, np.float32)
         self._vol = np.empty(model.shape, np.float32)
+        self.bias = cl.Buffer(self.device.context, mf.READ_ONLY, self._pad(n_labels) * _F4)
+        self.start_sweep(0, 0, 1.0, np.zeros(n_labels))
+
+    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
+        """Random stream (Philox key *seed*, counter tag *tag*), global temperature *t_in*
+        and per-label balance term *bias* for the updates of the coming sweep."""
+        import pyopencl as cl
+
+        padded = np.zeros(self._pad(self.model.labels.size), np.float32)
+        padded[: bias.size] = bias
+        cl.enqueue_copy(self.device.queue, self.bias, padded)
+        key = seed_key(seed)
+        self.sweep_args = (np.int32(self.params.relaxation_code), self.bias, np.uint32(key[0]), np.uint32(key[1]),
+                           np.uint32(tag), np.float32(t_in))
 
     def update(self, voxels: np.ndarray) -> None:
         """Relax one conflict-free set of voxels (flat indices), batch by batch."""
@@ -196,7 +210,7 @@ class CLBackend:
             self.vol_buf, self.temp_buf, *self._shape_args(), self.vox_buf, np.int32(voxels.size),
             np.int32(m.offsets.shape[0]), self.sums, np.int32(self.n_groups), self.gvals, self.kern, self.labels,
             np.int32(m.labels.size), self.kfactor, self.union, np.int32(m.union_offsets.shape[0]),
-            np.float32(self.params.xi), np.int32(self.params.heuristic_code))
+            np.float32(self.params.xi), np.int32(self.params.heuristic_code), *self.sweep_args)
 
     def temperature(self) -> np.ndarray:
         import pyopencl as cl

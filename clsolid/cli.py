@@ -14,7 +14,8 @@ import time
 from pathlib import Path
 
 from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
-from .params import DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, SLICE_LAYOUTS, UPSAMPLING, MLParams
+from .params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, RELAXATIONS, SLICE_LAYOUTS,
+                     UPSAMPLING, MLParams)
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
 _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
@@ -53,7 +54,8 @@ def _add_synth(sub) -> None:
     p.add_argument("--stop-fraction", type=float, default=d.stop_fraction,
                    help="stop a scale when the global temperature fell by this fraction (default %(default)s)")
     p.add_argument("--max-sweeps", type=int, default=d.max_sweeps, help="most sweeps per scale (default %(default)s)")
-    p.add_argument("--upsampling", choices=UPSAMPLING, default=d.upsampling, help="coarse-to-fine copy (default %(default)s)")
+    p.add_argument("--upsampling", choices=UPSAMPLING, default=None,
+                   help="coarse-to-fine copy (default 1/8; 8/8 under --relaxation annealing, as TIP14)")
     p.add_argument("--inherited", choices=INHERITED, default=d.inherited,
                    help="voxels from the coarser scale: re-synthesised with t=0, or fixed (default %(default)s)")
     p.add_argument("--insert-slices", type=int, default=d.insert_slices,
@@ -69,6 +71,18 @@ def _add_synth(sub) -> None:
     p.add_argument("--bandwidth-factor", type=float, nargs="+", default=None,
                    help="multiply Silverman's bandwidth: one factor, or one per scale finest first "
                         f"(default {DEFAULT_BANDWIDTH_FACTOR}; 1 = the thesis)")
+    p.add_argument("--relaxation", choices=RELAXATIONS, default=d.relaxation,
+                   help="argmax (icm, the thesis), a draw from the LCPDF (gibbs), or TIP14's simulated "
+                        "annealing (default %(default)s)")
+    p.add_argument("--anneal-start", type=float, default=d.anneal_start,
+                   help="annealing: initial global temperature t_in of every scale (default %(default)s)")
+    p.add_argument("--anneal-cooling", type=float, default=d.anneal_cooling,
+                   help="annealing: t_in is multiplied by this after every sweep (default %(default)s)")
+    p.add_argument("--sweeps", type=int, default=d.sweeps,
+                   help="exactly this many sweeps per scale (default: stop on the temperature rule)")
+    p.add_argument("--balance", type=float, default=d.balance,
+                   help="weight beta of the label-histogram balance term beta*log(exemplar/volume fraction) "
+                        "(default %(default)s = off)")
     p.add_argument("--builtin-size", type=int, default=64, help="side of a built-in exemplar (default 64)")
     p.add_argument("--seed", type=int, default=None, help="random seed (default: fresh, recorded in the sidecar)")
     p.add_argument("--device", default=None,
@@ -168,7 +182,9 @@ def cmd_synth(args) -> int:
     options = dict(pyramid=args.pyramid, xi=args.xi, stop_fraction=args.stop_fraction, max_sweeps=args.max_sweeps,
                    upsampling=args.upsampling, inherited=args.inherited, insert_slices=args.insert_slices,
                    slice_layout=args.slice_layout,
-                   initial_temperature=args.initial_temperature, builtin_size=args.builtin_size)
+                   initial_temperature=args.initial_temperature, builtin_size=args.builtin_size,
+                   relaxation=args.relaxation, anneal_start=args.anneal_start, anneal_cooling=args.anneal_cooling,
+                   sweeps=args.sweeps, balance=args.balance)
     for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale
         values = getattr(args, name)
         if values is not None:

@@ -51,6 +51,12 @@ PYRAMIDS = ("binomial", "decimate")
 # brick over 6 seeds, histogram score 0.06 against 0.40 (README, Quality).
 DEFAULT_BANDWIDTH_FACTOR = 0.2
 
+#: How a visited voxel takes its new label (thesis_spec §2.3). "icm" takes the argmax (the
+#: thesis); "gibbs" draws it from the combined, normalised LCPDF, with ICM's per-voxel
+#: temperatures and stop rule; "annealing" is TIP14 Fig. 1: a uniform random proposal
+#: accepted by a Metropolis-like test at a global temperature t_in that falls every sweep.
+RELAXATIONS = ("icm", "gibbs", "annealing")
+
 
 def canonical_heuristic(name: str) -> str:
     """Return the clsolid name of a heuristic given any of its names or tags."""
@@ -67,6 +73,10 @@ def _int_in(name: str, value, lo: int, hi: int | None = None) -> int:
         rng = f">= {lo}" if hi is None else f"in [{lo}, {hi}]"
         raise InputError(f"{name}={value!r} must be {rng}")
     return int(value)
+
+
+def _real(value) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def _choice(name: str, value, options: tuple[str, ...]) -> str:
@@ -91,13 +101,18 @@ class MLParams:
     xi: float = -3.0
     stop_fraction: float = 0.95
     max_sweeps: int = 30
-    upsampling: str = "1/8"
+    upsampling: str | None = None
     inherited: str = "resynthesize"
     insert_slices: int = 4
     slice_layout: str = "aligned"
     initial_temperature: float = 1.0
     bandwidth_factor: float | tuple[float, ...] | None = None
     bandwidth: tuple[float, ...] | None = field(default=None)
+    relaxation: str = "icm"
+    anneal_start: float = 1.0
+    anneal_cooling: float = 0.8
+    sweeps: int | None = None
+    balance: float = 0.0
 
     def __post_init__(self):
         k = _int_in("neighborhood", self.neighborhood, 3, 31)
@@ -115,7 +130,6 @@ class MLParams:
         if not (isinstance(self.stop_fraction, numbers.Real) and 0 < self.stop_fraction <= 1):
             raise InputError(f"stop_fraction={self.stop_fraction!r} must be in (0, 1] (1 = until zero)")
         _int_in("max_sweeps", self.max_sweeps, 1)
-        _choice("upsampling", self.upsampling, UPSAMPLING)
         _choice("inherited", self.inherited, INHERITED)
         _int_in("insert_slices", self.insert_slices, 0)
         _choice("slice_layout", self.slice_layout, SLICE_LAYOUTS)
@@ -130,6 +144,20 @@ class MLParams:
             object.__setattr__(self, "bandwidth_factor", self._per_scale("bandwidth_factor", self.bandwidth_factor))
         else:
             object.__setattr__(self, "bandwidth_factor", (DEFAULT_BANDWIDTH_FACTOR,) * self.scales)
+        _choice("relaxation", self.relaxation, RELAXATIONS)
+        if self.upsampling is None:  # 1/8 for ICM (thesis §5.3.3), 8/8 for annealing (TIP14)
+            object.__setattr__(self, "upsampling", "8/8" if self.relaxation == "annealing" else "1/8")
+        _choice("upsampling", self.upsampling, UPSAMPLING)
+        if not (_real(self.anneal_start) and self.anneal_start > 0):
+            raise InputError(f"anneal_start={self.anneal_start!r} must be a positive number "
+                             "(the initial t_in; 1 = Metropolis on the LCPDF)")
+        if not (_real(self.anneal_cooling) and 0 < self.anneal_cooling < 1):
+            raise InputError(f"anneal_cooling={self.anneal_cooling!r} must be in (0, 1) "
+                             "(t_in is multiplied by it after every sweep)")
+        if self.sweeps is not None:
+            _int_in("sweeps", self.sweeps, 1)
+        if not (_real(self.balance) and self.balance >= 0):
+            raise InputError(f"balance={self.balance!r} must be a number >= 0 (0 = off)")
 
     def _per_scale(self, name: str, value) -> tuple[float, ...]:
         """One positive number for every scale, or one per scale (finest first)."""
@@ -157,6 +185,11 @@ class MLParams:
     def from_dict(cls, d: dict) -> "MLParams":
         """The parameters recorded by :meth:`to_dict` (e.g. ``SynthesisResult.params``); other keys are ignored."""
         return cls(**{k: d[k] for k in cls.__dataclass_fields__ if k in d})
+
+    @property
+    def relaxation_code(self) -> int:
+        """0 icm, 1 gibbs, 2 annealing (the kernel's numbering)."""
+        return RELAXATIONS.index(self.relaxation)
 
     def to_dict(self) -> dict:
         d = asdict(self)

@@ -15,8 +15,23 @@ _M0, _M1 = np.uint64(0xD2511F53), np.uint64(0xCD9E8D57)
 _W0, _W1 = np.uint64(0x9E3779B9), np.uint64(0xBB67AE85)
 _LO = np.uint64(0xFFFFFFFF)
 
-#: Tags that separate the streams drawn for different purposes.
+#: Tags that separate the streams drawn for different purposes. The random start uses
+#: TAG_INIT; the stochastic relaxations use :func:`relax_tag`, which never equals it.
 TAG_INIT = 0
+#: Purpose field (bits 28-31) of the relaxation tags.
+PURPOSE_RELAX = 1
+
+
+def relax_tag(level: int, sweep: int) -> int:
+    """Tag of the relaxation draws of one sweep: ``purpose << 28 | level << 20 | sweep``.
+
+    *level* is the scale (0 = full resolution, < 256) and *sweep* counts from 1 within
+    the scale (< 2^20). Each voxel is visited at most once per sweep, so the counter
+    (x, y, z, tag) is used once; its four words serve the draws of that one visit.
+    """
+    if not (0 <= level < 256 and 0 <= sweep < 1 << 20):
+        raise ValueError(f"level={level} or sweep={sweep} out of the tag's range")
+    return (PURPOSE_RELAX << 28) | (level << 20) | sweep
 
 
 def philox4x32(counter: np.ndarray, key: np.ndarray, rounds: int = 10) -> np.ndarray:
@@ -45,11 +60,22 @@ def seed_key(seed: int) -> np.ndarray:
     return np.array([seed & 0xFFFFFFFF, seed >> 32], dtype=np.uint32)
 
 
+def voxel_words(seed: int, z: np.ndarray, y: np.ndarray, x: np.ndarray, tag: int) -> np.ndarray:
+    """The four Philox words ``(..., 4)`` of voxels at ``(z, y, x)``, counter ``(x, y, z, tag)``."""
+    x = np.asarray(x, dtype=np.uint32)
+    ctr = np.stack([x, np.asarray(y, np.uint32), np.asarray(z, np.uint32), np.full_like(x, tag)], axis=-1)
+    return philox4x32(ctr, seed_key(seed))
+
+
 def voxel_uint32(seed: int, shape: tuple[int, int, int], tag: int) -> np.ndarray:
     """First Philox word for every voxel of a ``(Z, Y, X)`` block, counter ``(x, y, z, tag)``."""
     z, y, x = np.meshgrid(*(np.arange(n, dtype=np.uint32) for n in shape), indexing="ij")
-    ctr = np.stack([x, y, z, np.full_like(x, tag)], axis=-1)
-    return philox4x32(ctr, seed_key(seed))[..., 0]
+    return voxel_words(seed, z, y, x, tag)[..., 0]
+
+
+def unit_float(u: np.ndarray) -> np.ndarray:
+    """Uniform words to floats in [0, 1): ``(u >> 8) * 2^-24``, exact in float32 and float64."""
+    return (np.asarray(u, np.uint32) >> np.uint32(8)).astype(np.float64) * 2.0**-24
 
 
 def bounded(u: np.ndarray, n: int) -> np.ndarray:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .ml_model import ScaleModel
-from .philox import TAG_INIT, bounded, voxel_uint32
+from .philox import TAG_INIT, bounded, unit_float, voxel_uint32, voxel_words
 
 _CHUNK = 128  # voxels per vectorised step, to bound memory
 
@@ -59,22 +59,96 @@ def first_best(score: np.ndarray) -> np.ndarray:
     return np.argmax(score >= best - TIE_TOL * np.maximum(1.0, np.abs(best)), axis=-1)
 
 
-def decide(code: int, logl: np.ndarray, labels: np.ndarray) -> np.ndarray:
-    """Apply a heuristic to normalised per-view log LCPDFs ``(views, m, L)``; ties -> lowest."""
-    if code <= 2:  # h2-product, h2-min, h2-max
-        combine = (np.sum, np.min, np.max)[code]
-        return labels[first_best(combine(logl, axis=0))]
-    best = first_best(logl)  # (views, m)
+def combine_views(code: int, values: np.ndarray, scores: np.ndarray) -> np.ndarray:
+    """h1 heuristics: combine per-view solutions ``values`` with their log LCPDFs ``scores``
+    (both ``(views, m)``): the least (3) or most (4) probable view, or the mean (5)."""
     if code == 5:  # h1-mean, rounded half up to a whole grey level
-        return np.floor(labels[best].mean(axis=0) + 0.5)
-    value = np.take_along_axis(logl, best[:, :, None], axis=2)[:, :, 0]
-    pick = np.zeros(best.shape[1], dtype=int)
-    chosen = value[0].copy()
-    for v in range(1, value.shape[0]):  # a near-tie between views keeps the earlier view
+        return np.floor(values.mean(axis=0) + 0.5)
+    pick = np.zeros(values.shape[1], dtype=int)
+    chosen = scores[0].copy()
+    for v in range(1, scores.shape[0]):  # a near-tie between views keeps the earlier view
         tol = TIE_TOL * np.maximum(1.0, np.abs(chosen))
-        better = value[v] < chosen - tol if code == 3 else value[v] > chosen + tol
-        pick[better], chosen[better] = v, value[v][better]
-    return labels[best[pick, np.arange(best.shape[1])]]
+        better = scores[v] < chosen - tol if code == 3 else scores[v] > chosen + tol
+        pick[better], chosen[better] = v, scores[v][better]
+    return values[pick, np.arange(values.shape[1])]
+
+
+def combined_score(code: int, logl: np.ndarray) -> np.ndarray:
+    """h2 heuristics: one log score per label, ``(m, L)``: sum (product), min or max over views."""
+    return (np.sum, np.min, np.max)[code](logl, axis=0)
+
+
+def decide(code: int, logl: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """ICM: apply a heuristic to normalised per-view log LCPDFs ``(views, m, L)``; ties -> lowest."""
+    if code <= 2:  # h2-product, h2-min, h2-max
+        return labels[first_best(combined_score(code, logl))]
+    best = first_best(logl)  # (views, m)
+    value = np.take_along_axis(logl, best[:, :, None], axis=2)[:, :, 0]
+    return combine_views(code, labels[best], value)
+
+
+def draw(score: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Gibbs: for each row of ``score`` ``(m, L)``, the index drawn from the distribution
+    proportional to ``exp(score)`` by inverting its cumulative sum at ``r * total``."""
+    w = np.exp(score - score.max(axis=-1, keepdims=True))
+    cum = np.cumsum(w, axis=-1)
+    above = cum > (r * cum[:, -1])[:, None]
+    last = w.shape[-1] - 1 - np.argmax(w[:, ::-1] > 0, axis=-1)  # r * total rounded up to total
+    return np.where(above.any(axis=-1), np.argmax(above, axis=-1), last)
+
+
+def accept(s_new: np.ndarray, s_cur: np.ndarray, t_in: float, q: np.ndarray) -> np.ndarray:
+    """Annealing (TIP14 Fig. 1): accept where ``p = exp(s_new - s_cur) > 1`` or ``p * t_in > q``.
+
+    Log scores within the tie tolerance of each other count as equal (p = 1).
+    """
+    d = s_new - s_cur
+    d = np.where(np.abs(d) <= TIE_TOL * np.maximum(1.0, np.abs(s_cur)), 0.0, d)
+    return (d > 0) | (np.exp(d) * t_in > q)
+
+
+def nearest_index(x: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Index of the label nearest to each value (the first on a tie)."""
+    return np.argmin(np.abs(labels[None, :] - x[:, None]), axis=1)
+
+
+def relax(relaxation: str, code: int, logl: np.ndarray, labels: np.ndarray, x: np.ndarray,
+          words: np.ndarray | None = None, t_in: float = 1.0, bias: np.ndarray | None = None) -> np.ndarray:
+    """New values of voxels whose current values are ``x`` ``(m,)``, from their normalised
+    per-view log LCPDFs ``logl`` ``(views, m, L)`` (thesis_spec §2.3).
+
+    ``relaxation`` is ``"icm"`` (argmax), ``"gibbs"`` (a draw from the combined, normalised
+    LCPDF) or ``"annealing"`` (a uniform proposal lambda, kept if p = P(lambda)/P(x) > 1 or
+    p * t_in > q). ``words`` ``(m, 4)`` are the voxels' Philox words (see ``kernels/ml.cl``,
+    ``decide``, for which word serves which draw); ``bias`` ``(L,)`` is added to the combined
+    log score (h2) or to each view's (h1). h1 heuristics combine per-view solutions: the
+    argmax, a draw from that view, or the proposal where that view alone accepts it.
+    """
+    if bias is not None:
+        logl = logl + (bias if code > 2 else 0.0)
+    views, m, n = logl.shape
+    rows = np.arange(m)
+    if relaxation == "annealing":
+        cur, prop = nearest_index(x, labels), bounded(words[:, 0], n)
+    if code <= 2:
+        score = combined_score(code, logl) + (0.0 if bias is None else bias)
+        if relaxation == "icm":
+            return labels[first_best(score)]
+        if relaxation == "gibbs":
+            return labels[draw(score, unit_float(words[:, 0]))]
+        ok = accept(score[rows, prop], score[rows, cur], t_in, unit_float(words[:, 1]))
+        return np.where(ok, labels[prop], x)
+    if relaxation == "icm":
+        return decide(code, logl, labels)
+    if relaxation == "gibbs":
+        best = np.stack([draw(logl[v], unit_float(words[:, v])) for v in range(views)])
+        values = labels[best]
+    else:
+        ok = np.stack([accept(logl[v, rows, prop], logl[v, rows, cur], t_in, unit_float(words[:, 1 + v]))
+                       for v in range(views)])
+        best = np.where(ok, prop, cur)
+        values = np.where(ok, labels[prop], x)
+    return combine_views(code, values, np.take_along_axis(logl, best[:, :, None], axis=2)[:, :, 0])
 
 
 def new_temperature(model: ScaleModel, temp: np.ndarray, voxels: np.ndarray, xi: float) -> np.ndarray:
@@ -101,6 +175,11 @@ class ReferenceBackend:
         self.model, self.params = model, params
         self.vol = vol.astype(np.float64).copy()
         self.temp = temp.astype(np.float64).copy()
+        self.start_sweep(0, 0, 1.0, np.zeros(model.labels.size))
+
+    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
+        """Random stream, global temperature and balance term of the coming sweep."""
+        self.seed, self.tag, self.t_in, self.bias = seed, tag, t_in, np.asarray(bias, np.float64)
 
     def update(self, voxels: np.ndarray) -> None:
         """Relax one conflict-free set of voxels (flat indices)."""
@@ -111,7 +190,11 @@ class ReferenceBackend:
         m = self.model
         views = m.offsets.shape[0]
         logl = np.stack([normalise(log_lcpdf(m, self.vol, self.temp, voxels, v)) for v in range(views)])
-        labels = decide(self.params.heuristic_code, logl, m.labels)
+        words = None
+        if self.params.relaxation != "icm":
+            words = voxel_words(self.seed, *np.unravel_index(voxels, m.shape), self.tag)
+        labels = relax(self.params.relaxation, self.params.heuristic_code, logl, m.labels,
+                       self.vol.ravel()[voxels], words, self.t_in, self.bias)
         hot = self.temp.ravel()[voxels] > 0  # t held at 0 for inherited (re-synthesised) voxels
         t_new = new_temperature(m, self.temp, voxels, self.params.xi)
         self.vol.ravel()[voxels] = labels

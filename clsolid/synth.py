@@ -12,8 +12,9 @@ from typing import Any, Callable
 import numpy as np
 
 from .errors import InputError
-from .ml_model import ScaleModel, build_scale, check_exemplar_fits
+from .ml_model import ScaleModel, build_scale, check_exemplar_fits, nearest_label
 from .params import DEPTH_AXIS, MLParams
+from .philox import relax_tag
 from .schedule import set_order, split_by_colour
 
 log = logging.getLogger(__name__)
@@ -24,8 +25,9 @@ class SweepInfo:
     """What a ``progress`` callback receives after every sweep.
 
     ``scale`` counts from 1 (coarsest) to ``n_scales`` (full resolution); ``temperature``
-    is the global temperature (sum of voxel temperatures) after the sweep and
-    ``target`` the value that ends the scale. ``eta`` is an estimate in seconds of
+    is the global temperature after the sweep (the sum of voxel temperatures, or under
+    ``relaxation="annealing"`` the t_in of the next sweep) and ``target`` the value that
+    ends the scale (0 when a fixed number of ``sweeps`` does). ``eta`` is an estimate in seconds of
     the time left for the whole synthesis. ``volume()`` returns a copy of the block
     at the current scale, and ``exemplar`` is the quantised exemplar decimated to that
     scale, so the two can be compared during the run.
@@ -216,6 +218,31 @@ def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, 
     return vol, temp
 
 
+#: Label fractions below this count as this in the balance term (less than a voxel in 10^4).
+BALANCE_EPS = 1e-4
+
+
+def label_fractions(values: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Fraction of *values* on each of the sorted *labels* (a value off the labels, as
+    ``h1-mean`` can write, counts for the nearest)."""
+    idx = np.searchsorted(labels, nearest_label(np.ravel(values).astype(np.float64), labels))
+    return np.bincount(idx, minlength=labels.size) / idx.size
+
+
+def balance_bias(volume: np.ndarray, model: ScaleModel, beta: float) -> np.ndarray:
+    """The label-histogram balance term ``beta * log(e / c)`` per label (a Kopf-style re-weighting).
+
+    ``e`` is the label histogram of this scale's exemplar and ``c`` the volume's, both
+    floored at :data:`BALANCE_EPS`: labels the volume has too few of are favoured, those
+    it has too many of are penalised. ``beta = 0`` gives zeros (off).
+    """
+    if beta == 0:
+        return np.zeros(model.labels.size)
+    e = np.maximum(label_fractions(model.exemplar, model.labels), BALANCE_EPS)
+    c = np.maximum(label_fractions(volume, model.labels), BALANCE_EPS)
+    return beta * (np.log(e) - np.log(c))
+
+
 _MIN_TIMED_SWEEP = 0.5  # seconds; shorter sweeps do not predict the finer scales
 
 
@@ -237,7 +264,7 @@ class _Clock:
         ratio = t / t_prev if t_prev > 0 else 0.0
         if t <= target or ratio <= 0:
             left_here = 0
-        elif ratio >= 1:
+        elif ratio >= 1 or target <= 0:
             left_here = sweeps_left
         else:
             left_here = min(sweeps_left, math.ceil(math.log(target / t) / math.log(ratio)))
@@ -259,7 +286,14 @@ def run_ml(
     backend: Any,
     progress: Callable[[SweepInfo], None] | None = None,
 ) -> tuple[np.ndarray, dict, list[float]]:
-    """Run the multi-scale ICM on quantised exemplar labels with a back end.
+    """Run the multi-scale relaxation on quantised exemplar labels with a back end.
+
+    Each sweep draws its random numbers from Philox keyed by *seed*, counter (x, y, z,
+    :func:`clsolid.philox.relax_tag` (level, sweep)). Under ``relaxation="annealing"``
+    there are no voxel temperatures (every neighbour counts fully, TIP14 Fig. 1) and
+    every voxel is visited in every sweep (trusted ones too, unless ``inherited="fixed"``);
+    the global temperature t_in starts each scale at ``anneal_start`` and is multiplied by
+    ``anneal_cooling`` after each sweep, and the stop rule applies to it.
 
     Returns the full-resolution volume, the timings and the per-scale bandwidths.
     """
@@ -270,40 +304,57 @@ def run_ml(
     clock = _Clock(models)
     base = backend.init_volume(shape, seed, models[0].exemplar)
     resynth = params.inherited == "resynthesize"
+    annealing = params.relaxation == "annealing"
+    n_sweeps = params.sweeps or params.max_sweeps
     coarse = None
     timings: dict = {"scales": []}
     for i, model in enumerate(models):
         t_scale = time.perf_counter()
         vol, temp = start_state(model, base, coarse, params, seed)
         inherited = temp == 0
+        if annealing:
+            temp[...] = 0.0  # no pixel temperatures: every neighbour's weight 1 - t is 1
         backend.start_scale(model, vol, temp, params)
-        t_init = float(temp.sum())
-        target = (1.0 - params.stop_fraction) * t_init
+        t_init = params.anneal_start if annealing else float(temp.sum())
+        target = 0.0 if params.sweeps else (1.0 - params.stop_fraction) * t_init
+        bias = np.zeros(model.labels.size)
         record = {"level": model.level, "shape": list(model.shape), "bandwidth": model.bandwidth,
                   "n_sites": model.n_sites, "n_sets": model.n_sets, "initial_temperature": t_init,
                   "temperatures": [], "visited": [], "sweep_seconds": []}
         t_now = t_init
-        for sweep in range(1, params.max_sweeps + 1):
+        for sweep in range(1, n_sweeps + 1):
             t_sweep = time.perf_counter()
-            temp = backend.temperature()
-            active = (temp > 0) | (inherited & resynth)
+            if annealing:
+                active = ~inherited | resynth
+            else:
+                temp = backend.temperature()
+                active = (temp > 0) | (inherited & resynth)
+            if params.balance:
+                bias = balance_bias(backend.volume(), model, params.balance)
+            backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias)
             sets = split_by_colour(active, model.colour, model.n_sets)
             for c in set_order(model.n_sets, seed, model.level, sweep):
                 if sets[c].size:
                     backend.update(sets[c])
-            t_prev, t_now = t_now, float(np.sum(backend.temperature(), dtype=np.float64))
+            if annealing:
+                t_prev, t_now = t_now, t_now * params.anneal_cooling
+            else:
+                t_prev, t_now = t_now, float(np.sum(backend.temperature(), dtype=np.float64))
             visited = int(active.sum())
             sweep_s = time.perf_counter() - t_sweep
             record["temperatures"].append(t_now)
             record["visited"].append(visited)
             record["sweep_seconds"].append(sweep_s)
-            done = t_now <= target or t_now == 0.0 or sweep == params.max_sweeps
+            if params.sweeps:
+                done = sweep == n_sweeps
+            else:
+                done = t_now <= target or t_now == 0.0 or sweep == n_sweeps
             log.debug("scale %d sweep %d: T=%.1f visited=%d %.2fs", i + 1, sweep, t_now, visited, sweep_s)
             if progress is not None:
                 eta = clock.eta(i, sweep_s, visited, model, t_now, t_prev, target,
-                                0 if done else params.max_sweeps - sweep)
+                                0 if done else n_sweeps - sweep)
                 progress(SweepInfo(scale=i + 1, n_scales=len(models), shape=model.shape, sweep=sweep,
-                                   max_sweeps=params.max_sweeps, temperature=t_now,
+                                   max_sweeps=n_sweeps, temperature=t_now,
                                    initial_temperature=t_init, target=target, visited=visited,
                                    elapsed=time.perf_counter() - clock.t0, eta=eta,
                                    exemplar=model.exemplar, volume=lambda: np.array(backend.volume(), copy=True)))

@@ -20,6 +20,8 @@ typedef CAT(int, VW) intv;
 #define NLV ((NLMAX + VW - 1) / VW)   /* label vectors */
 #define NGV ((NGMAX + VW - 1) / VW)   /* group vectors */
 
+#include <pyopencl-random123/philox.cl>
+
 /* Far below any term that can matter: exp of it is 0 in float32. */
 #define NEGLIGIBLE (-87.0f)
 
@@ -233,11 +235,66 @@ inline void view_logf(__global const float *ls, int n_groups, __global const flo
     for (int j = 0; j < NLV; ++j) f[j] -= (floatv)(lse);
 }
 
-/* One ICM decision per voxel from its views' group sums, then the temperature update
+/* Uniform word to a float in [0, 1): (u >> 8) * 2^-24, exact in float32 (philox.unit_float). */
+inline float unit_float(uint u)
+{
+    return (float)(u >> 8) * (1.0f / 16777216.0f);
+}
+
+/* Gibbs: the index drawn from the distribution proportional to exp(score[l]), l < n, by
+ * inverting its cumulative sum at r * total, r in [0, 1). */
+inline int draw_label(const float *score, int n, float r)
+{
+    float mx = score[0];
+    for (int l = 1; l < n; ++l) mx = fmax(mx, score[l]);
+    float total = 0.0f;
+    for (int l = 0; l < n; ++l) total += exp(score[l] - mx);
+    float target = r * total, cum = 0.0f;
+    int last = 0;
+    for (int l = 0; l < n; ++l) {
+        float w = exp(score[l] - mx);
+        if (w > 0.0f) {
+            last = l;
+            cum += w;
+            if (cum > target) return l;
+        }
+    }
+    return last;   /* r * total rounded up to total */
+}
+
+/* Annealing (TIP14 Fig. 1): accept a proposal of log score s_new against the current
+ * label's s_cur if p = exp(s_new - s_cur) > 1 or p * t_in > q. Scores within the tie
+ * tolerance are equal (p = 1): exact ties are common, as in first_best. */
+inline bool accept(float s_new, float s_cur, float t_in, float q)
+{
+    float d = s_new - s_cur;
+    if (fabs(d) <= TIE_TOL * fmax(1.0f, fabs(s_cur))) d = 0.0f;
+    return d > 0.0f || exp(d) * t_in > q;
+}
+
+/* Index of the label nearest to x (the first on a tie): x is a label except after h1-mean. */
+inline int nearest_label(__global const float *labels, int n, float x)
+{
+    int best = 0;
+    for (int l = 1; l < n; ++l)
+        if (fabs(labels[l] - x) < fabs(labels[best] - x)) best = l;
+    return best;
+}
+
+/* One relaxation step per voxel from its views' group sums, then the temperature update
  *   t = max(0, (xi + sum_r t_r) / |N|) over the union of the views' neighbourhoods.
  * A voxel whose temperature is 0 when visited is an inherited voxel being re-synthesised:
  * its value may change but its temperature stays 0. Ties (see TIE_TOL) go to the lowest label.
  * heuristic: 0 h2-product, 1 h2-min, 2 h2-max, 3 h1-lowest, 4 h1-highest, 5 h1-mean.
+ * relaxation: 0 ICM (argmax), 1 Gibbs (a draw from the combined, normalised LCPDF),
+ * 2 annealing (a uniform proposal, accepted as in accept()). bias[label] (NLV*VW, 0 past the
+ * labels) is added to the combined log score (h2) or to each view's (h1): the balance term.
+ * The random words come from Philox4x32-10 keyed (key0, key1), counter (x, y, z, tag):
+ *   Gibbs      word v draws view v (h1), word 0 the combined LCPDF (h2);
+ *   annealing  word 0 the proposal (multiply-high onto the labels), word 1 + v the q of
+ *              view v (h1), word 1 the q of the combined score (h2).
+ * h1 heuristics combine the per-view solutions: the argmax, a draw, or the proposal where
+ * that view alone accepts it (else the current value).
  */
 __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, int X,
                      __global const int *voxels, int n_voxels, int n_views,
@@ -245,7 +302,8 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
                      __global const float *group_values, __global const float *kern,
                      __global const float *labels, int n_labels, float k,
                      __global const int *union_offsets, int n_union, float xi,
-                     int heuristic)
+                     int heuristic, int relaxation, __global const float *bias,
+                     uint key0, uint key1, uint tag, float t_in)
 {
     int i = get_global_id(0);
     if (i >= n_voxels) return;
@@ -256,9 +314,26 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
         view_logf(log_sums + (size_t)(i * n_views + v) * NGV * VW, n_groups, kern, group_values,
                   labels, n_labels, k, fv[v]);
 
+    uint u[4] = {0u, 0u, 0u, 0u};
+    float x_s = vol[voxel];
+    int cur = 0, prop = 0;
+    if (relaxation) {
+        int z = voxel / (Y * X), rem = voxel - z * Y * X;
+        int y = rem / X, x = rem - y * X;
+        philox4x32_ctr_t c = {{(uint)x, (uint)y, (uint)z, tag}};
+        philox4x32_key_t key = {{key0, key1}};
+        philox4x32_ctr_t r = philox4x32(c, key);
+        for (int j = 0; j < 4; ++j) u[j] = r.v[j];
+        if (relaxation == 2) {
+            cur = nearest_label(labels, n_labels, x_s);
+            prop = mul_hi(u[0], (uint)n_labels);
+        }
+    }
+    __global const floatv *bv = (__global const floatv *)bias;
+
     float value;
     if (heuristic <= 2) {
-        /* combine the views label by label, vector-wise, then take the first maximum */
+        /* combine the views label by label, vector-wise, then decide on the combined score */
         floatv comb[NLV];
         for (int j = 0; j < NLV; ++j) {
             floatv c = fv[0][j];
@@ -266,19 +341,37 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
                 floatv o = fv[v][j];
                 c = heuristic == 0 ? c + o : heuristic == 1 ? (c < o ? c : o) : (c > o ? c : o);
             }
-            comb[j] = c;
+            comb[j] = c + bv[j];
         }
-        value = labels[first_best((const float *)comb, n_labels)];
+        const float *cs = (const float *)comb;
+        if (relaxation == 0)
+            value = labels[first_best(cs, n_labels)];
+        else if (relaxation == 1)
+            value = labels[draw_label(cs, n_labels, unit_float(u[0]))];
+        else
+            value = accept(cs[prop], cs[cur], t_in, unit_float(u[1])) ? labels[prop] : x_s;
     } else {
         float chosen = 0.0f, chosen_p = 0.0f, mean = 0.0f;
         for (int v = 0; v < n_views; ++v) {
+            for (int j = 0; j < NLV; ++j) fv[v][j] += bv[j];
             const float *fs = (const float *)fv[v];
-            int best = first_best(fs, n_labels);
+            int best = cur;
+            float val = x_s;
+            if (relaxation == 0) {
+                best = first_best(fs, n_labels);
+                val = labels[best];
+            } else if (relaxation == 1) {
+                best = draw_label(fs, n_labels, unit_float(u[v]));
+                val = labels[best];
+            } else if (accept(fs[prop], fs[cur], t_in, unit_float(u[1 + v]))) {
+                best = prop;
+                val = labels[prop];
+            }
             float p = fs[best], tol = TIE_TOL * fmax(1.0f, fabs(chosen_p));
-            mean += labels[best];
+            mean += val;
             /* between views, too, a near-tie keeps the earlier view */
             if (v == 0 || (heuristic == 3 && p < chosen_p - tol) || (heuristic == 4 && p > chosen_p + tol)) {
-                chosen = labels[best];
+                chosen = val;
                 chosen_p = p;
             }
         }
