@@ -1,4 +1,4 @@
-/* NP-MRF maximum-likelihood synthesis: the per-voxel work of one ICM step.
+/* NP-MRF maximum-likelihood synthesis: the per-voxel work of one relaxation step.
  *
  * Layout: volumes are (Z, Y, X), row-major; a voxel's flat index is (z * Y + y) * X + x.
  * Global id 0 enumerates work items (voxels or voxel-views of the current batch); the
