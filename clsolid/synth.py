@@ -230,11 +230,14 @@ def label_fractions(values: np.ndarray, labels: np.ndarray) -> np.ndarray:
 
 
 def balance_bias(volume: np.ndarray, model: ScaleModel, beta: float) -> np.ndarray:
-    """The label-histogram balance term ``beta * log(e / c)`` per label (a Kopf-style re-weighting).
+    """One step of the label-histogram balance, ``beta * log(e / c)`` per label (Kopf-style re-weighting).
 
     ``e`` is the label histogram of this scale's exemplar and ``c`` the volume's, both
     floored at :data:`BALANCE_EPS`: labels the volume has too few of are favoured, those
-    it has too many of are penalised. ``beta = 0`` gives zeros (off).
+    it has too many of are penalised. ``beta = 0`` gives zeros (off). :func:`run_ml` adds
+    the steps up, sweep after sweep and from scale to scale (an integral controller): a
+    fixed ``beta * log(e / c)`` is a few tenths of a nat, far less than the LCPDF's own
+    preference for the majority, while the sum grows until the fractions match.
     """
     if beta == 0:
         return np.zeros(model.labels.size)
@@ -308,6 +311,7 @@ def run_ml(
     n_sweeps = params.sweeps or params.max_sweeps
     coarse = None
     timings: dict = {"scales": []}
+    bias = np.zeros(models[0].labels.size)  # the balance term, summed over sweeps and scales
     for i, model in enumerate(models):
         t_scale = time.perf_counter()
         vol, temp = start_state(model, base, coarse, params, seed)
@@ -317,7 +321,6 @@ def run_ml(
         backend.start_scale(model, vol, temp, params)
         t_init = params.anneal_start if annealing else float(temp.sum())
         target = 0.0 if params.sweeps else (1.0 - params.stop_fraction) * t_init
-        bias = np.zeros(model.labels.size)
         record = {"level": model.level, "shape": list(model.shape), "bandwidth": model.bandwidth,
                   "n_sites": model.n_sites, "n_sets": model.n_sets, "initial_temperature": t_init,
                   "temperatures": [], "visited": [], "sweep_seconds": []}
@@ -330,7 +333,7 @@ def run_ml(
                 temp = backend.temperature()
                 active = (temp > 0) | (inherited & resynth)
             if params.balance:
-                bias = balance_bias(backend.volume(), model, params.balance)
+                bias = bias + balance_bias(backend.volume(), model, params.balance)
             backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias)
             sets = split_by_colour(active, model.colour, model.n_sets)
             for c in set_order(model.n_sets, seed, model.level, sweep):

@@ -77,6 +77,16 @@ def level_indices(res: Any) -> tuple[np.ndarray, np.ndarray]:
     return res.labels, res.exemplar_labels
 
 
+def copy_chance(exemplar: np.ndarray, side: int) -> float:
+    """What the copy measure gives without copying: a window of the exemplar's lower half
+    against its upper half (two parts of the same material). Sparse and two-phase exemplars
+    match by chance on most pixels (a slice of matrix equals a window of matrix)."""
+    half = exemplar.shape[0] // 2
+    h, w = min(side, exemplar.shape[0] - half), min(side, exemplar.shape[1])
+    window = exemplar[half:half + h, :w][None]
+    return float(metrics.match_counts(window, exemplar[:half]).max() / window[0].size)
+
+
 def inserted(res: Any) -> dict[str, np.ndarray]:
     """Depths of the ``+in`` slices of every view of a result (none for an unconstrained view)."""
     depths = inserted_depths(res.labels.shape, MLParams.from_dict(res.params))
@@ -102,7 +112,7 @@ def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
         "seconds": seconds, "constrained": list(constrained), "scores": scores,
         "mirror": mirror, "mirror_max": max((r for r in mirror.values() if np.isfinite(r)), default=None),
         "copy": {"fraction": copy.fraction, "view": copy.view, "index": copy.index, "shift": list(copy.shift),
-                 "inserted": bool(copy.index in slices[copy.view])},
+                 "inserted": bool(copy.index in slices[copy.view]), "chance": copy_chance(ex, min(vol.shape))},
         "inserted_depths": {v: d.tolist() for v, d in slices.items()},
         "phase_error_pp": None, "fractions": None,
     }
@@ -179,7 +189,8 @@ def markdown(rows: dict[str, dict], settings: dict) -> str:
         "structure; – = not measurable for this exemplar. Phase err: largest phase-fraction error, "
         "percentage points. Mirror: correlation with the x↔z mirror after removing each y-plane's "
         "mean (the largest over axis pairs with 3 views). Copy: largest fraction of a slice equal to a "
-        "shifted exemplar window, with the slice (view and depth; +in: an inserted slice)."
+        "shifted exemplar window, with the slice (view and depth; +in: an inserted slice) and, in "
+        "brackets, its chance level: a window of the exemplar's lower half against its upper half."
         + (" Each cell is the worst seed; time is the mean." if len(settings["seeds"]) > 1 else ""),
         "",
         "| exemplar | kind | phase err | " + " | ".join(f"{title} F/R/T" for _, title in SCORES)
@@ -191,7 +202,8 @@ def markdown(rows: dict[str, dict], settings: dict) -> str:
         kind = f"{len(info.phases)} phases" if info.kind == "categorical" else "grey"
         cells = ["/".join(_fmt(row["scores"][v][key]) for v in VIEWS) for key, _ in SCORES]
         c = row["copy"]
-        copy = f"{c['fraction']:.2f} {c['view'][0].upper()}{c['index']}{' +in' if c['inserted'] else ''}"
+        copy = (f"{c['fraction']:.2f} {c['view'][0].upper()}{c['index']}{' +in' if c['inserted'] else ''} "
+                f"({c['chance']:.2f})")
         lines.append(f"| {name} | {kind} | {_fmt(row['phase_error_pp'], 1)} | " + " | ".join(cells)
                      + f" | {_fmt(row['mirror'])} | {copy} | {row['seconds']:.1f} |")
     lines += ["", "Targets met (scores in the constrained views):", ""]
