@@ -57,9 +57,16 @@ def synthesize(
     The NP-MRF maximum-likelihood method of Urs, Da Costa & Germain (IEEE TIP 2014):
     every voxel takes the grey level that maximises its local conditional probability,
     estimated with a Gaussian Parzen window over every neighbourhood of the exemplar,
-    on 2 or 3 orthogonal slices through the voxel; relaxed by ICM with per-voxel
-    temperatures (or a Gibbs sampler, or simulated annealing), coarse to fine. Voxels are updated in conflict-free sets, so the
-    result is that of a sequential ICM visiting the sets in a seeded order.
+    on 2 or 3 orthogonal slices through the voxel; relaxed coarse to fine with per-voxel
+    temperatures by a Gibbs sampler (the default), by ICM (the thesis) or by simulated
+    annealing (TIP14). Voxels are updated in conflict-free sets, so the result is that of
+    a sequential relaxation visiting the sets in a seeded order.
+
+    The defaults depart from the published method where the gallery of exemplars
+    (``tools/gallery.py``) showed it fails: Gibbs draws instead of ICM's argmax, a
+    label-histogram balance, and staggered ``+in`` slices. ``relaxation="icm",
+    balance=0, slice_layout="aligned"`` (with ``bandwidth_factor=1, pyramid="decimate"``)
+    is the thesis's form. See the README, Choices.
 
     Parameters
     ----------
@@ -119,11 +126,13 @@ def synthesize(
         default -3), ``stop_fraction`` (0.95: a scale stops when the global
         temperature has fallen by this fraction, or reaches 0), ``max_sweeps`` (30 per scale),
         ``upsampling`` (``"1/8"`` or ``"8/8"``; default 1/8, and 8/8 under annealing as in
-        TIP14), ``inherited`` (``"resynthesize"`` with t held at 0, or ``"fixed"``), ``insert_slices`` (exemplar slices tiled onto this many slices
-        of each constrained view at the start and trusted (t = 0), the thesis's ``+in``; default 4;
-        0 gives the ``-in`` start, which collapses to the mode under ICM), ``slice_layout``
-        (``"aligned"``: the same depths and tiling in every view; ``"staggered"``: each
-        view's slices between the other's, each with its own seeded shift of the exemplar),
+        TIP14), ``inherited`` (``"resynthesize"`` with t held at 0, or ``"fixed"``),
+        ``insert_slices`` (exemplar slices tiled onto this many slices of each constrained
+        view at the start and trusted (t = 0), the thesis's ``+in``; default 4; 0 gives the
+        ``-in`` start, which collapses to the majority), ``slice_layout`` (``"staggered"``,
+        the default: each view's slices between the other's, each with its own seeded
+        shift of the exemplar; ``"aligned"``: the same depths and tiling in every view, as
+        the thesis, which makes the block nearly its own x<->z mirror image),
         ``initial_temperature`` (1),
         ``bandwidth`` (Parzen h, one value or one per scale finest first; default
         ``bandwidth_factor`` x Silverman's rule per scale), ``bandwidth_factor`` (multiplies
@@ -131,9 +140,9 @@ def synthesize(
         thesis uses 1: see the README, Quality), ``builtin_size``, and OpenCL tuning: ``vector_width``,
         ``voxels_per_item``, ``local_size``, ``max_batch``.
 
-        Relaxation (thesis_spec §2.3): ``relaxation`` is ``"icm"`` (default, the thesis: each
-        visited voxel takes the argmax), ``"gibbs"`` (it draws its label from the combined,
-        normalised LCPDF; per-voxel temperatures, neighbour weights and stop rule as ICM) or
+        Relaxation (thesis_spec §2.3): ``relaxation`` is ``"gibbs"`` (default: each visited
+        voxel draws its label from the combined, normalised LCPDF; per-voxel temperatures,
+        neighbour weights and stop rule as ICM), ``"icm"`` (the thesis: it takes the argmax) or
         ``"annealing"`` (TIP14 Fig. 1: no voxel temperatures, every neighbour counts fully and
         every voxel is visited each sweep, trusted ``+in`` and inherited ones included unless
         ``inherited="fixed"``; a uniformly drawn label lambda replaces x_s if
@@ -144,11 +153,11 @@ def synthesize(
         defaults) or after ``max_sweeps``. ``sweeps`` fixes the number of sweeps per scale
         instead, for any relaxation (default None: the stop rule). The h1 heuristics combine
         per-view solutions: each view's argmax, its own draw, or the proposal where that view
-        alone accepts it. ``balance`` (beta >= 0, default 0 = off) re-weights labels to keep the
-        exemplar's histogram (a departure, as Kopf et al.): before each sweep, beta * log(e / c)
-        is added to each label's log score, e and c being the label fractions of the exemplar at
-        that scale and of the volume (floored at 1e-4). On 32 levels beta = 1 suits Gibbs and
-        annealing, while ICM overshoots at 1 and does better near 0.3.
+        alone accepts it. ``balance`` (beta >= 0, default 1; 0 = off) re-weights labels to keep
+        the exemplar's histogram (a departure, as Kopf et al.): before each sweep, beta * log(e / c)
+        is added to a running per-label bias on the log score (an integral controller, carried
+        from scale to scale), e and c being the label fractions of the exemplar at that scale and
+        of the volume (floored at 1e-4). beta = 1 suits Gibbs; ICM does better near 0.3.
 
     Returns
     -------

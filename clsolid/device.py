@@ -172,6 +172,13 @@ def _score(dev) -> tuple:
     return (bool(dev.type & cl.device_type.GPU), int(dev.global_mem_size))
 
 
+def _names(dev) -> tuple[str, ...]:
+    """What a name given as ``--device`` may match: the device, its platform's name, vendor and
+    version ("pocl" is only in PoCL's version string)."""
+    p = dev.platform
+    return dev.name, p.name, p.vendor, p.version
+
+
 def _label(dev) -> str:
     return f"{dev.platform.name.strip()} / {dev.name.strip()}"
 
@@ -209,7 +216,7 @@ def _candidates(spec: str | None) -> tuple[list, bool]:
         if not typed:
             raise NoDeviceError(f"no OpenCL device of type {low!r}; run `clsolid devices` to list them")
         return typed, False
-    by_name = [d for d in all_devices if low in d.name.lower() or low in d.platform.name.lower()]
+    by_name = [d for d in all_devices if any(low in text.lower() for text in _names(d))]
     if not by_name:
         names = ", ".join(repr(d.name.strip()) for d in all_devices)
         raise NoDeviceError(f"no OpenCL device matches {spec!r} (have: {names}); run `clsolid devices`")

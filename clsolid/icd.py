@@ -124,7 +124,8 @@ def ensure_vendors() -> str | None:
     try:
         folder = write_vendor_dir(entries, cache_dir())
     except OSError:
-        folder = write_vendor_dir(entries, Path(tempfile.gettempdir()) / f"clsolid-{os.getuid()}")
+        user = getattr(os, "getuid", lambda: "user")()  # a read-only home: a per-user temporary folder
+        folder = write_vendor_dir(entries, Path(tempfile.gettempdir()) / f"clsolid-{user}")
     os.environ["OCL_ICD_VENDORS"] = _applied = str(folder)
     log.debug("OCL_ICD_VENDORS=%s (%s)", folder, ", ".join(entries))
     return _applied

@@ -104,15 +104,15 @@ class MLParams:
     upsampling: str | None = None
     inherited: str = "resynthesize"
     insert_slices: int = 4
-    slice_layout: str = "aligned"
+    slice_layout: str = "staggered"
     initial_temperature: float = 1.0
     bandwidth_factor: float | tuple[float, ...] | None = None
     bandwidth: tuple[float, ...] | None = field(default=None)
-    relaxation: str = "icm"
+    relaxation: str = "gibbs"
     anneal_start: float = 1.0
     anneal_cooling: float = 0.8
     sweeps: int | None = None
-    balance: float = 0.0
+    balance: float = 1.0
 
     def __post_init__(self):
         k = _int_in("neighborhood", self.neighborhood, 3, 31)

@@ -61,10 +61,8 @@ def test_unknown_pyramid_is_refused():
         MLParams(pyramid="gauss")
 
 
-@pytest.mark.parametrize("pyramid", ["binomial", "decimate"])
-def test_inserted_slices_show_each_scale_exemplar(brick_labels, pyramid):
-    """+in: every scale starts with its own exemplar on the same slices (depths halved), trusted."""
-    params = MLParams(neighborhood=3, scales=3, insert_slices=2, max_sweeps=1, pyramid=pyramid)
+def scale_starts(labels, shape, params, seed=5) -> list:
+    """(model, volume, temperatures) at the start of every scale of a reference run."""
     starts = []
 
     class Spy(ReferenceBackend):
@@ -72,8 +70,17 @@ def test_inserted_slices_show_each_scale_exemplar(brick_labels, pyramid):
             starts.append((model, vol.copy(), temp.copy()))
             super().start_scale(model, vol, temp, p)
 
+    run_ml(labels, shape, params, seed, Spy())
+    return starts
+
+
+@pytest.mark.parametrize("pyramid", ["binomial", "decimate"])
+def test_inserted_slices_show_each_scale_exemplar(brick_labels, pyramid):
+    """+in: every scale starts with its own exemplar on the same slices (depths halved), trusted."""
+    params = MLParams(neighborhood=3, scales=3, insert_slices=2, max_sweeps=1, pyramid=pyramid,
+                      slice_layout="aligned")
     shape = (20, 24, 16)
-    run_ml(brick_labels[:32, :32], shape, params, 5, Spy())
+    starts = scale_starts(brick_labels[:32, :32], shape, params)
     full_depths = {"front": slice_depths(shape[0], 2, 4), "right": slice_depths(shape[2], 2, 4)}
     for model, vol, temp in starts:
         Z, Y, X = model.shape
@@ -104,15 +111,8 @@ def _shift_of(slice_, exemplar, step, cols):
 def test_staggered_slices_break_the_x_z_symmetry_consistently_across_scales(brick_labels):
     """Staggered +in: the views' slices at different depths, each with its own shift, the same at every scale."""
     params = MLParams(neighborhood=3, scales=3, insert_slices=2, max_sweeps=1, slice_layout="staggered")
-    starts = []
-
-    class Spy(ReferenceBackend):
-        def start_scale(self, model, vol, temp, p):
-            starts.append((model, vol.copy(), temp.copy()))
-            super().start_scale(model, vol, temp, p)
-
     shape = (16, 24, 16)
-    run_ml(brick_labels[:32, :32], shape, params, 5, Spy())
+    starts = scale_starts(brick_labels[:32, :32], shape, params)
     depths = inserted_depths(shape, params)
     assert depths["front"].tolist() == [0, 8] and depths["right"].tolist() == [4, 12]
     shifts = []

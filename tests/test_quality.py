@@ -40,15 +40,25 @@ def scores_of(tool):
     return tool("quality_ml").scores
 
 
-# Issue 2, point 16: brick 64x64 -> 64^3, 9x9, 3 scales, 1/8, re-synthesis, h2-product,
+# Issue 2, point 16: brick 64x64 -> 64^3, 9x9, 3 scales, 1/8, re-synthesis, ICM, h2-product,
 # xi=-3, 95 %, 32 levels, 2 views. "Far closer than no structure" is read as a calibrated
 # score below 0.3 on both constrained views, for every seed tried.
 SEEDS = (1, 2, 3)
+#: The thesis's relaxation: ICM, no balance, the same +in slices in both views.
+ICM = dict(relaxation="icm", balance=0.0, slice_layout="aligned")
 
 
 @pytest.fixture(scope="module")
 def default_scores(device, brick_labels, scores_of):
-    """The thesis case with clsolid's defaults (binomial pyramid, 0.2 x Silverman), once per seed."""
+    """The thesis case (ICM) with clsolid's pyramid and bandwidth (binomial, 0.2 x Silverman), once per seed."""
+    return {seed: scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=seed, device=device,
+                                                             output="labels", **ICM))
+            for seed in SEEDS}
+
+
+@pytest.fixture(scope="module")
+def gibbs_scores(device, brick_labels, scores_of):
+    """The same brick case with today's defaults (Gibbs, balance, staggered +in), once per seed."""
     return {seed: scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=seed, device=device,
                                                              output="labels"))
             for seed in SEEDS}
@@ -61,6 +71,18 @@ def _assert_every_seed_below(scores: dict, metric: str, limit: float) -> None:
 
 
 @pytest.mark.slow
+def test_defaults_keep_brick_histogram(gibbs_scores):
+    _assert_every_seed_below(gibbs_scores, "histogram_kl", 0.1)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="Gibbs draws blur brick's mortar lines: the autocorrelation score rose "
+                   "from -0.16 (ICM) to 0.17-0.52 (seed 2, front), the price of the gallery-wide defaults")
+def test_defaults_keep_brick_autocorrelation(gibbs_scores):
+    _assert_every_seed_below(gibbs_scores, "autocorrelation_l2", 0.3)
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("metric", ["histogram_kl", "autocorrelation_l2"])
 def test_thesis_case_is_close_for_every_seed(default_scores, metric):
     _assert_every_seed_below(default_scores, metric, 0.3)
@@ -69,8 +91,8 @@ def test_thesis_case_is_close_for_every_seed(default_scores, metric):
 @pytest.mark.slow
 def test_thesis_decimation_is_close_on_its_worst_seed(device, brick_labels, scores_of):
     """The thesis's plain decimation (§2.5) meets the criterion too; seed 3 was its worst of 1-6."""
-    scores = {3: scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=3, device=device, output="labels",
-                                                             pyramid="decimate"))}
+    scores = {3: scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=3, device=device,
+                                                             output="labels", pyramid="decimate", **ICM))}
     for metric in ("autocorrelation_l2", "histogram_kl"):
         _assert_every_seed_below(scores, metric, 0.3)
 
@@ -79,6 +101,6 @@ def test_thesis_decimation_is_close_on_its_worst_seed(device, brick_labels, scor
 @pytest.mark.xfail(strict=True, reason="with the thesis's Silverman bandwidth the ICM is mode-seeking on brick: two dark "
                    "levels merge (seed 1: histogram 0.43; its autocorrelation, 0.05, is fine)")
 def test_thesis_bandwidth_keeps_the_grey_levels(device, brick_labels, scores_of):
-    scores = {1: scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device, output="labels",
-                                                             bandwidth_factor=1.0))}
+    scores = {1: scores_of(brick_labels, clsolid.synthesize("brick", (64, 64, 64), rng=1, device=device,
+                                                             output="labels", bandwidth_factor=1.0, **ICM))}
     _assert_every_seed_below(scores, "histogram_kl", 0.3)

@@ -153,13 +153,14 @@ def test_fixed_sweeps_apply_to_icm(device, small_labels):
     assert timings["scales"][0]["sweeps"] == 3
 
 
-def test_default_is_icm_and_unchanged(device, small_labels):
-    """The stochastic machinery is inert by default: explicit icm, balance 0, same volume."""
-    base = MLParams(neighborhood=3, scales=2)
-    assert base.relaxation == "icm" and base.balance == 0 and base.sweeps is None
-    a = run_ml(small_labels, (8, 10, 12), base, 5, CLBackend(device))[0]
-    b = run_ml(small_labels, (8, 10, 12), MLParams(neighborhood=3, scales=2, relaxation="icm", balance=0.0,
-                                                   anneal_start=3.0), 5, CLBackend(device))[0]
+def test_the_thesis_form_ignores_the_annealing_schedule(device, small_labels):
+    """ICM without balance on aligned slices (the thesis's form) does not see the annealing knobs."""
+    defaults = MLParams()
+    assert (defaults.relaxation, defaults.balance, defaults.slice_layout) == ("gibbs", 1.0, "staggered")
+    thesis = dict(neighborhood=3, scales=2, relaxation="icm", balance=0.0, slice_layout="aligned")
+    a = run_ml(small_labels, (8, 10, 12), MLParams(**thesis), 5, CLBackend(device))[0]
+    b = run_ml(small_labels, (8, 10, 12), MLParams(**thesis, anneal_start=3.0, anneal_cooling=0.5), 5,
+               CLBackend(device))[0]
     np.testing.assert_array_equal(a, b)
 
 
@@ -203,7 +204,10 @@ def test_bad_relaxation_parameters_name_themselves(kwargs, word):
 
 
 @pytest.mark.parametrize("argv, expected", [
-    ([], dict(relaxation="icm", anneal_start=1.0, anneal_cooling=0.8, sweeps=None, balance=0.0, upsampling="1/8")),
+    ([], dict(relaxation="gibbs", anneal_start=1.0, anneal_cooling=0.8, sweeps=None, balance=1.0, upsampling="1/8",
+              slice_layout="staggered")),
+    (["--relaxation", "icm", "--balance", "0", "--slice-layout", "aligned"],
+     dict(relaxation="icm", balance=0.0, slice_layout="aligned")),
     (["--relaxation", "annealing", "--anneal-start", "2", "--anneal-cooling", "0.5", "--sweeps", "2"],
      dict(relaxation="annealing", anneal_start=2.0, anneal_cooling=0.5, sweeps=2, upsampling="8/8")),
     (["--relaxation", "annealing", "--upsampling", "1/8"], dict(relaxation="annealing", upsampling="1/8")),

@@ -6,6 +6,7 @@ def test_bench_ml_runs_with_tuning(capsys, device, tool):
                             "--device", device.device.name.strip()[:8]])
     out = capsys.readouterr().out
     assert "tuning: {'voxels_per_item': 2}" in out and "% of matmul" in out and "end to end" in out
+    assert "x ICM" in out and "sweeps" in out
 
 
 def test_quality_ml_prints_every_seed(capsys, device, tmp_path, tool):

@@ -1,0 +1,121 @@
+"""The user's material, not the majority phase: gallery exemplars grown small with the defaults.
+
+Fast checks (32^3, the default 9x9 and 3 scales): phase fractions kept (within 10 points
+at this size; issue 10's 3 points are checked at 48^3 in the slow tests), no x<->z mirror
+image, and every relaxation reproducible by seed. The thesis's form is checked too, so that
+these tests are known to fail where the defect is.
+"""
+
+import numpy as np
+import pytest
+
+import clsolid
+from clsolid.gallery import gallery_exemplar
+from clsolid.metrics import mirror_correlation
+from clsolid.params import RELAXATIONS
+
+SHAPE = (32, 32, 32)
+FAST: dict = {}
+THESIS = dict(relaxation="icm", balance=0.0, slice_layout="aligned")
+MATERIALS = ("composite3", "fibres", "porous80")
+
+
+def phase_error_pp(exemplar: np.ndarray, volume: np.ndarray) -> float:
+    """Largest difference, in percentage points, between a phase's fraction in the two."""
+    phases = np.union1d(np.unique(exemplar), np.unique(volume))
+    return float(100 * max(abs(np.mean(exemplar == p) - np.mean(volume == p)) for p in phases))
+
+
+@pytest.fixture(scope="module")
+def grown(device):
+    """Each material grown once per device with the defaults, seed 1: {name: (exemplar, volume)}."""
+    cache = {}
+
+    def grow(name):
+        if name not in cache:
+            ex = gallery_exemplar(name, 64)
+            cache[name] = ex, clsolid.synthesize(ex, SHAPE, rng=1, device=device, **FAST)
+        return cache[name]
+
+    return grow
+
+
+@pytest.mark.parametrize("name", MATERIALS)
+def test_defaults_keep_every_phase_fraction(grown, name):
+    ex, vol = grown(name)
+    assert set(np.unique(vol)) <= set(np.unique(ex))  # the exemplar's own phase values
+    assert phase_error_pp(ex, vol) <= 10.0, f"{name}: a phase is off by {phase_error_pp(ex, vol):.1f} pp"
+
+
+@pytest.mark.parametrize("name", MATERIALS)
+def test_defaults_are_not_their_own_mirror_image(grown, name):
+    r = mirror_correlation(grown(name)[1].astype(float))
+    assert r <= 0.2, f"{name}: correlation with the x<->z mirror is {r:.2f}"
+
+
+def test_the_thesis_form_collapses_and_mirrors(device):
+    """The defect the defaults fix is there in the published form (so the tests above can fail)."""
+    ex = gallery_exemplar("fibres", 64)
+    vol = clsolid.synthesize(ex, SHAPE, rng=1, device=device, **FAST, **THESIS)
+    assert mirror_correlation(vol.astype(float)) > 0.3
+    assert phase_error_pp(ex, vol) > 10
+
+
+@pytest.mark.parametrize("relaxation", RELAXATIONS)
+def test_every_relaxation_is_reproducible_by_seed(device, relaxation):
+    ex = gallery_exemplar("composite3", 64)
+
+    def grow(seed):
+        return clsolid.synthesize(ex, (16, 16, 16), rng=seed, device=device, relaxation=relaxation,
+                                  neighborhood=5, scales=2)
+
+    a = grow(3)
+    np.testing.assert_array_equal(a, grow(3))
+    assert np.mean(a != grow(4)) > 0.05
+
+
+# --------------------------------------------------------------------------- issue 10's targets, 48^3
+# Measured with tools/gallery.py (seed 1, 64^2 -> 48^3, defaults; PoCL and Intel agree voxel
+# for voxel). A target that the defaults miss is a strict expected failure naming the value.
+TARGETS = {  # (exemplar, target): None if met, else why not
+    ("composite3", "phase"): None, ("lamellae", "phase"): None,
+    ("fibres", "phase"): "fibres' fraction is 3.9 points off (the balance has not converged when voxels freeze)",
+    ("composite3", "mirror"): None, ("lamellae", "mirror"): None,
+    ("gravel", "mirror"): "gravel's mirror correlation is 0.14",
+    ("composite3", "histogram"): None, ("gravel", "histogram"): None,
+    ("composite3", "patch"): None, ("gravel", "patch"): None,
+    ("fibres", "patch"): "fibres' patch score is 0.34/0.40: some fibres merge",
+    ("gravel", "autocorrelation"): None,
+    ("composite3", "autocorrelation"): "composite3's autocorrelation score is 0.47/0.45: particles too regular",
+}
+LIMITS = {"phase": ("phase_error_pp", 3.0), "mirror": ("mirror_max", 0.1), "histogram": ("histogram_kl", 0.1),
+          "patch": ("patch_sw", 0.3), "autocorrelation": ("autocorrelation_l2", 0.3)}
+
+
+@pytest.fixture(scope="module")
+def gallery_runs(device, tool):
+    """tools/gallery.py's measurements of one exemplar at 48^3 with the defaults, once per module."""
+    gallery, cache = tool("gallery"), {}
+
+    def measured(name):
+        if name not in cache:
+            cache[name] = gallery.run_one(name, 64, 48, 1, "ml", {}, device)[0]
+        return cache[name]
+
+    return measured
+
+
+def _value(run: dict, key: str) -> float:
+    if key in ("phase_error_pp", "mirror_max"):
+        return run[key]
+    return max(run["scores"][view][key] for view in run["constrained"])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name, target", [
+    pytest.param(name, target, marks=[] if why is None else pytest.mark.xfail(strict=True, reason=why))
+    for (name, target), why in TARGETS.items()])
+def test_issue_10_targets_at_48(gallery_runs, name, target):
+    key, limit = LIMITS[target]
+    value = _value(gallery_runs(name), key)
+    assert value <= limit, f"{name}: {target} {value:.2f} > {limit}"
