@@ -105,8 +105,9 @@ def list_devices(*, probe_devices: bool = True) -> list[dict]:
     Parameters
     ----------
     probe_devices : bool
-        Also say whether each device compiles and runs a tiny kernel (cached per device
-        and driver version, so only the first call builds anything).
+        Also say whether each device compiles and runs clsolid's kernels (see
+        :func:`clsolid.probe.probe`; cached per device and driver version, so only the
+        first call builds anything).
 
     Returns
     -------
