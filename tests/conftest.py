@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -87,8 +88,14 @@ def random_state(model, seed=0, cold=0.3):
 
 @pytest.fixture(scope="session")
 def tool():
-    """Import a script of ``tools/`` by name, e.g. ``tool("quality_ml")``."""
+    """Import a script of ``tools/`` by name, e.g. ``tool("quality_ml")``.
+
+    tools/ goes on ``sys.path`` as it does when a script runs, so the scripts can import
+    each other (gallery and compare_devices reuse quality_ml's helpers).
+    """
     folder = Path(__file__).resolve().parents[1] / "tools"
+    if str(folder) not in sys.path:
+        sys.path.insert(0, str(folder))
 
     def load(name: str):
         spec = importlib.util.spec_from_file_location(name, folder / f"{name}.py")

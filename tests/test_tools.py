@@ -19,14 +19,7 @@ def test_quality_ml_prints_every_seed(capsys, device, tmp_path, tool):
 
 
 def test_compare_devices_reports_each_pair(capsys, tool):
-    import sys
-    from pathlib import Path
-
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))  # it reuses quality_ml's helpers
-    try:
-        tool("compare_devices").main(["--shape", "8", "8", "8", "--set", "neighborhood=3", "--set", "scales=1"])
-    finally:
-        sys.path.pop(0)
+    tool("compare_devices").main(["--shape", "8", "8", "8", "--set", "neighborhood=3", "--set", "scales=1"])
     out = capsys.readouterr().out
     assert "seed 1" in out and ("identical voxels" in out or "nothing to compare" in out)
 

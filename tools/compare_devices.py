@@ -19,11 +19,10 @@ import numpy as np
 
 import clsolid
 from clsolid.exemplar import builtin_exemplar, level_map
+from quality_ml import METRICS, parse_setting, scores  # beside this script (tools/ is on the path when it runs)
 
 
 def main(argv=None) -> None:
-    from quality_ml import METRICS, parse_setting, scores  # beside this script
-
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--shape", nargs=3, type=int, default=(64, 64, 64))
     ap.add_argument("--exemplar", default="brick")

@@ -18,8 +18,6 @@ from the +in slices). With several seeds every cell shows the worst seed.
 from __future__ import annotations
 
 import argparse
-import functools
-import importlib.util
 import json
 import sys
 import time
@@ -37,6 +35,7 @@ from clsolid.metrics.symmetry import AXIS_PAIRS
 from clsolid.params import VIEW_SETS, MLParams
 from clsolid.preview import render_preview
 from clsolid.synth import inserted_depths, preview_depths
+from quality_ml import parse_setting  # beside this script (tools/ is on the path when it runs)
 
 VIEWS = metrics.VIEWS
 #: The calibrated scores reported per view: (key in clsolid.metrics.evaluate, column title).
@@ -53,20 +52,6 @@ TARGETS = (
 REFERENCE_REPEATS = 3
 #: Smallest long side, in pixels, of a montage panel.
 PANEL_MIN = 128
-
-
-@functools.cache
-def _quality_ml() -> Any:
-    """tools/quality_ml.py, loaded from beside this file (tools/ is not a package)."""
-    spec = importlib.util.spec_from_file_location("quality_ml", Path(__file__).with_name("quality_ml.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def _parse_setting(text: str) -> tuple[str, object]:
-    """``name=value``, parsed as tools/quality_ml.py parses it."""
-    return _quality_ml().parse_setting(text)
 
 
 # ----------------------------------------------------------------------------- one run
@@ -241,7 +226,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--shape", type=int, default=48, metavar="N", help="cube side of the volumes (default 48)")
     ap.add_argument("--seeds", nargs="+", type=int, default=[1], help="seeds (default 1)")
     ap.add_argument("--method", default="ml", help="synthesis method (default ml)")
-    ap.add_argument("--set", dest="settings", action="append", type=_parse_setting, default=[],
+    ap.add_argument("--set", dest="settings", action="append", type=parse_setting, default=[],
                     metavar="NAME=VALUE", help="a synthesize() keyword, repeatable")
     ap.add_argument("--device", default=None, help="OpenCL device (default: clsolid's choice)")
     ap.add_argument("-o", "--outdir", type=Path, required=True, help="folder for gallery.md/.json and montage.png")
