@@ -153,11 +153,13 @@ def synthesize(
         defaults) or after ``max_sweeps``. ``sweeps`` fixes the number of sweeps per scale
         instead, for any relaxation (default None: the stop rule). The h1 heuristics combine
         per-view solutions: each view's argmax, its own draw, or the proposal where that view
-        alone accepts it. ``balance`` (beta >= 0, default 1; 0 = off) re-weights labels to keep
-        the exemplar's histogram (a departure, as Kopf et al.): before each sweep, beta * log(e / c)
-        is added to a running per-label bias on the log score (an integral controller, carried
-        from scale to scale), e and c being the label fractions of the exemplar at that scale and
-        of the volume (floored at 1e-4). beta = 1 suits Gibbs; ICM does better near 0.3.
+        alone accepts it. ``balance`` (beta in [0, 1], default 1; 0 = off) keeps the
+        exemplar's label fractions (a departure, as Kopf et al.'s histogram re-weighting):
+        after every conflict-free set, a per-label bias on the log score is fitted to the
+        scores that set left, so that the voxels still to visit bring the whole volume to
+        the exemplar's fractions at that scale (``clsolid.balance``); beta < 1 aims that
+        far from the unbiased fractions. Exact in expectation for Gibbs draws; ICM and
+        annealing decide otherwise than by a draw, and keep the fractions less closely.
 
     Returns
     -------

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _kernels
+from .balance import n_score_slots, score_stride
 from .device import Device
 from .errors import DeviceMemoryError, InputError
 from .ml_model import ScaleModel
@@ -83,6 +84,7 @@ class CLBackend:
             "exemplar patches": chunks * nr * self.vw * _F4,
             "group log-sums": batch * views * self._pad(n_labels) * _F4,
             "voxel indices": batch * _F4,
+            "balance scores": n_score_slots(model.shape) * n_labels * _F4,
         }
 
     def prepare(self, models: list[ScaleModel]) -> None:
@@ -165,6 +167,9 @@ class CLBackend:
         self._temp = np.empty(model.shape, np.float32)
         self._vol = np.empty(model.shape, np.float32)
         self.bias = cl.Buffer(self.device.context, mf.READ_ONLY, self._pad(n_labels) * _F4)
+        self._scores = np.zeros((n_score_slots(model.shape), n_labels), np.float32)
+        self.scores_buf = self._buf(self._scores, writable=True)
+        self.score_args = (self.scores_buf, np.int32(score_stride(model.shape)))
         self.start_sweep(0, 0, 1.0, np.zeros(n_labels))
 
     def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
@@ -210,7 +215,7 @@ class CLBackend:
             self.vol_buf, self.temp_buf, *self._shape_args(), self.vox_buf, np.int32(voxels.size),
             np.int32(m.offsets.shape[0]), self.sums, np.int32(self.n_groups), self.gvals, self.kern, self.labels,
             np.int32(m.labels.size), self.kfactor, self.union, np.int32(m.union_offsets.shape[0]),
-            np.float32(self.params.xi), np.int32(self.params.heuristic_code), *self.sweep_args)
+            np.float32(self.params.xi), np.int32(self.params.heuristic_code), *self.sweep_args, *self.score_args)
 
     def temperature(self) -> np.ndarray:
         import pyopencl as cl
@@ -223,6 +228,15 @@ class CLBackend:
 
         cl.enqueue_copy(self.device.queue, self._vol, self.vol_buf)
         return self._vol
+
+    def scores(self) -> np.ndarray:
+        """Combined log scores before the bias, ``(slots, labels)``, of the voxels whose flat
+        index is a multiple of :func:`clsolid.balance.score_stride` (row = index / stride), as
+        their last visit left them."""
+        import pyopencl as cl
+
+        cl.enqueue_copy(self.device.queue, self._scores, self.scores_buf)
+        return self._scores
 
     def group_log_sums(self, voxels: np.ndarray) -> np.ndarray:
         """Run only the Parzen kernel on *voxels*; return ``(m, views, groups)`` (for tests)."""

@@ -81,8 +81,8 @@ def _add_synth(sub) -> None:
     p.add_argument("--sweeps", type=int, default=d.sweeps,
                    help="exactly this many sweeps per scale (default: stop on the temperature rule)")
     p.add_argument("--balance", type=float, default=d.balance,
-                   help="step beta of the label-histogram balance, beta*log(exemplar/volume fraction) added up "
-                        "every sweep (default %(default)s; 0 = off, the thesis)")
+                   help="label-histogram balance in [0, 1]: each sweep aims that far from the unbiased "
+                        "fractions towards the exemplar's (default %(default)s = exactly; 0 = off, the thesis)")
     p.add_argument("--builtin-size", type=int, default=64, help="side of a built-in exemplar (default 64)")
     p.add_argument("--seed", type=int, default=None, help="random seed (default: fresh, recorded in the sidecar)")
     p.add_argument("--device", default=None,

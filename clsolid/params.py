@@ -156,8 +156,9 @@ class MLParams:
                              "(t_in is multiplied by it after every sweep)")
         if self.sweeps is not None:
             _int_in("sweeps", self.sweeps, 1)
-        if not (_real(self.balance) and self.balance >= 0):
-            raise InputError(f"balance={self.balance!r} must be a number >= 0 (0 = off)")
+        if not (_real(self.balance) and 0 <= self.balance <= 1):
+            raise InputError(f"balance={self.balance!r} must be a number in [0, 1] "
+                             "(0 = off, 1 = the exemplar's label fractions exactly)")
 
     def _per_scale(self, name: str, value) -> tuple[float, ...]:
         """One positive number for every scale, or one per scale (finest first)."""

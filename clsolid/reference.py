@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .balance import n_score_slots, score_stride
 from .ml_model import ScaleModel
 from .philox import TAG_INIT, bounded, unit_float, voxel_uint32, voxel_words
 
@@ -104,12 +105,18 @@ def accept(s_new: np.ndarray, s_cur: np.ndarray, t_in: float, q: np.ndarray) -> 
     """
     d = s_new - s_cur
     d = np.where(np.abs(d) <= TIE_TOL * np.maximum(1.0, np.abs(s_cur)), 0.0, d)
-    return (d > 0) | (np.exp(d) * t_in > q)
+    return (d > 0) | (np.exp(np.minimum(d, 0.0)) * t_in > q)  # d > 0 is in anyway: no overflow
 
 
 def nearest_index(x: np.ndarray, labels: np.ndarray) -> np.ndarray:
     """Index of the label nearest to each value (the first on a tie)."""
     return np.argmin(np.abs(labels[None, :] - x[:, None]), axis=1)
+
+
+def unbiased_score(code: int, logl: np.ndarray) -> np.ndarray:
+    """The combined log score ``(m, L)`` the balance sees: the h2 combination, or for h1
+    heuristics (which decide per view) the product of the views."""
+    return combined_score(code if code <= 2 else 0, logl)
 
 
 def relax(relaxation: str, code: int, logl: np.ndarray, labels: np.ndarray, x: np.ndarray,
@@ -175,6 +182,8 @@ class ReferenceBackend:
         self.model, self.params = model, params
         self.vol = vol.astype(np.float64).copy()
         self.temp = temp.astype(np.float64).copy()
+        self._scores = np.zeros((n_score_slots(model.shape), model.labels.size))
+        self.stride = score_stride(model.shape)
         self.start_sweep(0, 0, 1.0, np.zeros(model.labels.size))
 
     def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
@@ -193,7 +202,10 @@ class ReferenceBackend:
         words = None
         if self.params.relaxation != "icm":
             words = voxel_words(self.seed, *np.unravel_index(voxels, m.shape), self.tag)
-        labels = relax(self.params.relaxation, self.params.heuristic_code, logl, m.labels,
+        code = self.params.heuristic_code
+        kept = voxels % self.stride == 0
+        self._scores[voxels[kept] // self.stride] = unbiased_score(code, logl[:, kept])
+        labels = relax(self.params.relaxation, code, logl, m.labels,
                        self.vol.ravel()[voxels], words, self.t_in, self.bias)
         hot = self.temp.ravel()[voxels] > 0  # t held at 0 for inherited (re-synthesised) voxels
         t_new = new_temperature(m, self.temp, voxels, self.params.xi)
@@ -205,6 +217,10 @@ class ReferenceBackend:
 
     def volume(self) -> np.ndarray:
         return self.vol
+
+    def scores(self) -> np.ndarray:
+        """Combined log scores before the bias of the kept voxels (see ``CLBackend.scores``)."""
+        return self._scores
 
     def lcpdf(self, voxels: np.ndarray) -> np.ndarray:
         """Normalised per-view log LCPDFs ``(views, m, L)`` at the current state (for tests)."""

@@ -11,6 +11,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .balance import project_bias, score_stride, softmax, sweep_target
 from .errors import InputError
 from .ml_model import ScaleModel, build_scale, check_exemplar_fits, nearest_label
 from .params import DEPTH_AXIS, MLParams
@@ -218,32 +219,51 @@ def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, 
     return vol, temp
 
 
-#: Label fractions below this count as this in the balance term (less than a voxel in 10^4).
-BALANCE_EPS = 1e-4
-
-
 def label_fractions(values: np.ndarray, labels: np.ndarray) -> np.ndarray:
     """Fraction of *values* on each of the sorted *labels* (a value off the labels, as
     ``h1-mean`` can write, counts for the nearest)."""
-    idx = np.searchsorted(labels, nearest_label(np.ravel(values).astype(np.float64), labels))
-    return np.bincount(idx, minlength=labels.size) / idx.size
+    return np.bincount(label_index(values, labels), minlength=labels.size) / max(np.size(values), 1)
 
 
-def balance_bias(volume: np.ndarray, model: ScaleModel, beta: float) -> np.ndarray:
-    """One step of the label-histogram balance, ``beta * log(e / c)`` per label (Kopf-style re-weighting).
+def label_index(values: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Index in the sorted *labels* of each of *values* (flattened; off-label values: the nearest)."""
+    return np.searchsorted(labels, nearest_label(np.ravel(values).astype(np.float64), labels))
 
-    ``e`` is the label histogram of this scale's exemplar and ``c`` the volume's, both
-    floored at :data:`BALANCE_EPS`: labels the volume has too few of are favoured, those
-    it has too many of are penalised. ``beta = 0`` gives zeros (off). :func:`run_ml` adds
-    the steps up, sweep after sweep and from scale to scale (an integral controller): a
-    fixed ``beta * log(e / c)`` is a few tenths of a nat, far less than the LCPDF's own
-    preference for the majority, while the sum grows until the fractions match.
+
+class Balance:
+    """The label-histogram balance of one scale: the bias that keeps the volume's label
+    fractions at the exemplar's (the departure of clsolid.balance).
+
+    :meth:`after` is called after every conflict-free set and returns the bias for the
+    next one, so the bias follows the volume within a sweep: a bias fitted once per sweep
+    lags it (the scores drift as the labels change, and the fractions swing from sweep
+    to sweep by several points).
     """
-    if beta == 0:
-        return np.zeros(model.labels.size)
-    e = np.maximum(label_fractions(model.exemplar, model.labels), BALANCE_EPS)
-    c = np.maximum(label_fractions(volume, model.labels), BALANCE_EPS)
-    return beta * (np.log(e) - np.log(c))
+
+    def __init__(self, model: ScaleModel, beta: float, volume: np.ndarray) -> None:
+        self.model, self.beta = model, beta
+        self.pi = label_fractions(model.exemplar, model.labels)
+        self.stride = score_stride(model.shape)
+        self.bias = np.zeros(model.labels.size)  # a coarser scale's labels mean other grey levels: start afresh
+        self.index = label_index(volume, model.labels)  # each voxel's label, kept up to date
+
+    def after(self, backend: Any, updated: np.ndarray, pending: np.ndarray) -> np.ndarray:
+        """The bias for the *pending* voxels, from the scores the *updated* ones left.
+
+        The pending voxels aim at whatever brings the whole volume to the exemplar's
+        fractions, given the labels of all the others.
+        """
+        labels = self.model.labels
+        self.index[updated] = label_index(np.asarray(backend.volume()).ravel()[updated], labels)
+        rows = updated[updated % self.stride == 0] // self.stride
+        if rows.size == 0 or pending.size == 0:
+            return self.bias
+        scores = np.asarray(backend.scores(), np.float64)[rows]
+        fixed = (np.bincount(self.index, minlength=labels.size)
+                 - np.bincount(self.index[pending], minlength=labels.size))
+        target = sweep_target(self.pi, fixed, pending.size, softmax(scores).mean(axis=0), self.beta)
+        self.bias = project_bias(scores, target, self.bias)
+        return self.bias
 
 
 _MIN_TIMED_SWEEP = 0.5  # seconds; shorter sweeps do not predict the finer scales
@@ -311,7 +331,6 @@ def run_ml(
     n_sweeps = params.sweeps or params.max_sweeps
     coarse = None
     timings: dict = {"scales": []}
-    bias = np.zeros(models[0].labels.size)  # the balance term, summed over sweeps and scales
     for i, model in enumerate(models):
         t_scale = time.perf_counter()
         vol, temp = start_state(model, base, coarse, params, seed)
@@ -321,6 +340,8 @@ def run_ml(
         backend.start_scale(model, vol, temp, params)
         t_init = params.anneal_start if annealing else float(temp.sum())
         target = 0.0 if params.sweeps else (1.0 - params.stop_fraction) * t_init
+        balance = Balance(model, params.balance, vol) if params.balance else None
+        bias = np.zeros(model.labels.size)
         record = {"level": model.level, "shape": list(model.shape), "bandwidth": model.bandwidth,
                   "n_sites": model.n_sites, "n_sets": model.n_sets, "initial_temperature": t_init,
                   "temperatures": [], "visited": [], "sweep_seconds": []}
@@ -332,13 +353,15 @@ def run_ml(
             else:
                 temp = backend.temperature()
                 active = (temp > 0) | (inherited & resynth)
-            if params.balance:
-                bias = bias + balance_bias(backend.volume(), model, params.balance)
             backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias)
             sets = split_by_colour(active, model.colour, model.n_sets)
-            for c in set_order(model.n_sets, seed, model.level, sweep):
-                if sets[c].size:
-                    backend.update(sets[c])
+            order = [c for c in set_order(model.n_sets, seed, model.level, sweep) if sets[c].size]
+            for k, c in enumerate(order):
+                backend.update(sets[c])
+                if balance is not None:  # the rest of this sweep, or after the last set the whole of it again
+                    pending = np.concatenate([sets[d] for d in order[k + 1:]] or [np.flatnonzero(active)])
+                    bias = balance.after(backend, sets[c], pending)
+                    backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias)
             if annealing:
                 t_prev, t_now = t_now, t_now * params.anneal_cooling
             else:

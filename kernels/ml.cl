@@ -295,6 +295,8 @@ inline int nearest_label(__global const float *labels, int n, float x)
  *              view v (h1), word 1 the q of the combined score (h2).
  * h1 heuristics combine the per-view solutions: the argmax, a draw, or the proposal where
  * that view alone accepts it (else the current value).
+ * scores[voxel / score_stride][label] receives, for voxels that are multiples of score_stride,
+ * the combined log score before the bias (h1: the sum of the views' log LCPDFs).
  */
 __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, int X,
                      __global const int *voxels, int n_voxels, int n_views,
@@ -303,7 +305,8 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
                      __global const float *labels, int n_labels, float k,
                      __global const int *union_offsets, int n_union, float xi,
                      int heuristic, int relaxation, __global const float *bias,
-                     uint key0, uint key1, uint tag, float t_in)
+                     uint key0, uint key1, uint tag, float t_in,
+                     __global float *scores, int score_stride)
 {
     int i = get_global_id(0);
     if (i >= n_voxels) return;
@@ -330,6 +333,8 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
         }
     }
     __global const floatv *bv = (__global const floatv *)bias;
+    /* The balance needs each kept voxel's combined score without the bias (clsolid.balance). */
+    __global float *keep = voxel % score_stride ? 0 : scores + (size_t)(voxel / score_stride) * n_labels;
 
     float value;
     if (heuristic <= 2) {
@@ -341,9 +346,12 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
                 floatv o = fv[v][j];
                 c = heuristic == 0 ? c + o : heuristic == 1 ? (c < o ? c : o) : (c > o ? c : o);
             }
-            comb[j] = c + bv[j];
+            comb[j] = c;
         }
         const float *cs = (const float *)comb;
+        if (keep)
+            for (int l = 0; l < n_labels; ++l) keep[l] = cs[l];
+        for (int j = 0; j < NLV; ++j) comb[j] += bv[j];
         if (relaxation == 0)
             value = labels[first_best(cs, n_labels)];
         else if (relaxation == 1)
@@ -352,6 +360,12 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
             value = accept(cs[prop], cs[cur], t_in, unit_float(u[1])) ? labels[prop] : x_s;
     } else {
         float chosen = 0.0f, chosen_p = 0.0f, mean = 0.0f;
+        if (keep)   /* h1 decides per view: the product stands for the combined law */
+            for (int l = 0; l < n_labels; ++l) {
+                float c = 0.0f;
+                for (int v = 0; v < n_views; ++v) c += ((const float *)fv[v])[l];
+                keep[l] = c;
+            }
         for (int v = 0; v < n_views; ++v) {
             for (int j = 0; j < NLV; ++j) fv[v][j] += bv[j];
             const float *fs = (const float *)fv[v];

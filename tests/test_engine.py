@@ -22,7 +22,9 @@ CASES = [  # (neighborhood, views, heuristic, shape, scales)
 
 @pytest.mark.parametrize("k, views, heuristic, shape, scales", CASES)
 def test_whole_run_matches_reference(device, small_labels, k, views, heuristic, shape, scales):
-    params = MLParams(neighborhood=k, views=views, heuristic=heuristic, scales=scales, insert_slices=1)
+    # without the balance: its per-set fit turns float32's last bits into other biases
+    # (see tests/test_relaxation.py, test_balance_runs_alike)
+    params = MLParams(neighborhood=k, views=views, heuristic=heuristic, scales=scales, insert_slices=1, balance=0.0)
     ref, ref_t, _ = run_ml(small_labels, shape, params, 11, ReferenceBackend())
     got, got_t, _ = run_ml(small_labels, shape, params, 11, CLBackend(device))
     agree = np.mean(ref == got)
@@ -40,7 +42,7 @@ def test_every_runtime_grows_nearly_the_same_volume(small_labels):
     specs = [s for s in DEVICE_SPECS if not s.startswith("!")]
     if len(specs) < 2:
         pytest.skip(f"only {len(specs)} OpenCL runtime compiles here: nothing to compare")
-    params = MLParams(neighborhood=5, scales=2, insert_slices=1)
+    params = MLParams(neighborhood=5, scales=2, insert_slices=1, balance=0.0)  # as above
     volumes = [run_ml(small_labels, (16, 12, 14), params, 5, CLBackend(_DEVICES.get(s) or select_device(s)))[0]
                for s in specs]
     for spec, vol in zip(specs[1:], volumes[1:]):
@@ -136,7 +138,7 @@ def test_large_window_whole_run_matches_reference(device, brick_labels):
     from clsolid.exemplar import quantise
 
     ex = quantise(brick_labels[:40, :40], 16)
-    params = MLParams(neighborhood=13, scales=1)
+    params = MLParams(neighborhood=13, scales=1, balance=0.0)  # see test_whole_run_matches_reference
     ref = run_ml(ex, (12, 12, 12), params, 1, ReferenceBackend())[0]
     got = run_ml(ex, (12, 12, 12), params, 1, CLBackend(device))[0]
     assert np.mean(ref == got) >= 0.99

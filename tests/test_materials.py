@@ -1,8 +1,8 @@
 """The user's material, not the majority phase: gallery exemplars grown small with the defaults.
 
-Fast checks (32^3, the default 9x9 and 3 scales): phase fractions kept (within 10 points
-at this size; issue 10's 3 points are checked at 48^3 in the slow tests), no x<->z mirror
-image, and every relaxation reproducible by seed. The thesis's form is checked too, so that
+Fast checks (32^3, the default 9x9 and 3 scales): phase fractions kept (issue 10's 3
+points; the slow tests check its other targets at 48^3), no x<->z mirror image, and every
+relaxation reproducible by seed. The thesis's form is checked too, so that
 these tests are known to fail where the defect is.
 """
 
@@ -44,7 +44,7 @@ def grown(device):
 def test_defaults_keep_every_phase_fraction(grown, name):
     ex, vol = grown(name)
     assert set(np.unique(vol)) <= set(np.unique(ex))  # the exemplar's own phase values
-    assert phase_error_pp(ex, vol) <= 10.0, f"{name}: a phase is off by {phase_error_pp(ex, vol):.1f} pp"
+    assert phase_error_pp(ex, vol) <= 3.0, f"{name}: a phase is off by {phase_error_pp(ex, vol):.1f} pp"
 
 
 @pytest.mark.parametrize("name", MATERIALS)
@@ -78,15 +78,13 @@ def test_every_relaxation_is_reproducible_by_seed(device, relaxation):
 # Measured with tools/gallery.py (seed 1, 64^2 -> 48^3, defaults; PoCL and Intel agree voxel
 # for voxel). A target that the defaults miss is a strict expected failure naming the value.
 TARGETS = {  # (exemplar, target): None if met, else why not
-    ("composite3", "phase"): None, ("lamellae", "phase"): None,
-    ("fibres", "phase"): "fibres' fraction is 3.9 points off (the balance bias has not grown enough in 8 finest sweeps)",
-    ("composite3", "mirror"): None, ("lamellae", "mirror"): None,
-    ("gravel", "mirror"): "gravel's mirror correlation is 0.14",
+    ("composite3", "phase"): None, ("lamellae", "phase"): None, ("fibres", "phase"): None,
+    ("composite3", "mirror"): None, ("lamellae", "mirror"): None,  # lamellae: 0.096, near the line
+    ("gravel", "mirror"): "gravel's mirror correlation is 0.21: the grey textures' blocks stay x<->z-symmetric",
     ("composite3", "histogram"): None, ("gravel", "histogram"): None,
-    ("composite3", "patch"): None, ("gravel", "patch"): None,
-    ("fibres", "patch"): "fibres' patch score is 0.34/0.40: some fibres merge",
-    ("gravel", "autocorrelation"): None,
-    ("composite3", "autocorrelation"): "composite3's autocorrelation score is 0.47/0.45: particles too regular",
+    ("composite3", "patch"): None, ("gravel", "patch"): None, ("fibres", "patch"): None,
+    ("gravel", "autocorrelation"): None, ("composite3", "autocorrelation"): None,  # composite3: 0.28
+    ("fibres", "autocorrelation"): "fibres' autocorrelation score is 0.43/0.39: some fibres merge",
 }
 LIMITS = {"phase": ("phase_error_pp", 3.0), "mirror": ("mirror_max", 0.1), "histogram": ("histogram_kl", 0.1),
           "patch": ("patch_sw", 0.3), "autocorrelation": ("autocorrelation_l2", 0.3)}

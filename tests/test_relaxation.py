@@ -8,13 +8,18 @@ import pytest
 from conftest import random_state
 
 from clsolid import InputError
+from clsolid.balance import score_stride
 from clsolid.cl_backend import CLBackend
 from clsolid.ml_model import build_scale
 from clsolid.params import MLParams
 from clsolid.philox import TAG_INIT, relax_tag, unit_float, voxel_words
 from clsolid.reference import ReferenceBackend, normalise, relax
-from clsolid.synth import balance_bias, run_ml
+from clsolid.synth import label_fractions, run_ml
 
+# Whole runs without the balance: its bias is fitted to the scores of each set, float32 on
+# the device and float64 in the reference, and a near-flat fit turns their last-bit
+# differences into different biases, then different draws. The balance is compared one
+# step at a time (the scores it sees) and by its outcome (test_balance_runs_alike).
 CASES = [  # (relaxation, neighborhood, views, heuristic, shape, extra parameters)
     ("gibbs", 3, 2, "h2-product", (12, 12, 12), {}),
     ("gibbs", 3, 3, "h2-min", (12, 12, 12), {}),
@@ -22,21 +27,41 @@ CASES = [  # (relaxation, neighborhood, views, heuristic, shape, extra parameter
     ("annealing", 5, 2, "h2-product", (12, 12, 12), dict(sweeps=3)),
     ("annealing", 3, 3, "h1-mean", (8, 10, 12), dict(sweeps=3)),
     ("annealing", 3, 2, "h1-lowest", (12, 12, 12), dict(sweeps=3, anneal_start=0.5, anneal_cooling=0.5)),
-    ("icm", 3, 2, "h2-product", (12, 12, 12), dict(balance=1.0)),
-    ("gibbs", 3, 2, "h1-highest", (12, 12, 12), dict(balance=0.5)),
-    ("annealing", 3, 2, "h2-max", (12, 12, 12), dict(sweeps=3, balance=2.0)),
+    ("icm", 3, 2, "h2-product", (12, 12, 12), {}),
+    ("gibbs", 3, 2, "h1-highest", (12, 12, 12), {}),
+    ("annealing", 3, 2, "h2-max", (12, 12, 12), dict(sweeps=3)),
 ]
 
 
 @pytest.mark.parametrize("relaxation, k, views, heuristic, shape, extra", CASES)
 def test_whole_run_matches_reference(device, small_labels, relaxation, k, views, heuristic, shape, extra):
     params = MLParams(neighborhood=k, views=views, heuristic=heuristic, scales=2, insert_slices=1,
-                      relaxation=relaxation, **extra)
+                      relaxation=relaxation, balance=0.0, **extra)
     ref, ref_t, _ = run_ml(small_labels, shape, params, 11, ReferenceBackend())
     got, got_t, _ = run_ml(small_labels, shape, params, 11, CLBackend(device))
     agree = np.mean(ref == got)
     assert agree >= 0.99, f"only {agree:.3%} of voxels agree with the float64 reference"
     assert [s["sweeps"] for s in got_t["scales"]] == [s["sweeps"] for s in ref_t["scales"]]
+
+
+@pytest.mark.parametrize("relaxation", ["icm", "gibbs", "annealing"])
+def test_balance_runs_alike(device, small_labels, relaxation):
+    """With the balance, the device and the reference both end at the exemplar's label
+    fractions, where the same run without it does not."""
+    extra = dict(sweeps=4) if relaxation == "annealing" else {}
+    labels = np.unique(small_labels)
+    want = label_fractions(small_labels, labels)
+    err = {}
+    for beta in (0.0, 1.0):
+        params = MLParams(neighborhood=3, scales=2, relaxation=relaxation, balance=beta, **extra)
+        for name, backend in (("ref", ReferenceBackend()), ("cl", CLBackend(device))):
+            vol = run_ml(small_labels, (12, 12, 12), params, 11, backend)[0]
+            err[name, beta] = np.abs(label_fractions(vol, labels) - want).max()
+    # Annealing's accept/reject is not a draw from the biased law the balance fits: it only
+    # halves the error there (4.5-4.8 points against 9.1 in this case).
+    bound = 0.06 if relaxation == "annealing" else 0.02
+    assert err["ref", 1.0] < bound and err["cl", 1.0] < bound, err
+    assert min(err["ref", 0.0], err["cl", 0.0]) > 1.5 * max(err["ref", 1.0], err["cl", 1.0]), err
 
 
 def _fragile(relaxation, code, logl, labels, x, words, t_in, bias, eps=1e-3, tries=4):
@@ -78,6 +103,8 @@ def test_one_step_decides_as_the_reference(device, small_labels, relaxation, heu
             b.update(voxels)
         got, want = cl_b.volume().ravel()[voxels], ref.volume().ravel()[voxels]
         np.testing.assert_array_equal(got[~near], want[~near])
+        rows = voxels[voxels % score_stride(shape) == 0] // score_stride(shape)  # what the balance sees
+        np.testing.assert_allclose(cl_b.scores()[rows], ref.scores()[rows], rtol=1e-4, atol=2e-3)
         agree, n, fragile = agree + np.sum(got == want), n + voxels.size, fragile + near.sum()
         np.testing.assert_allclose(cl_b.temperature(), ref.temperature(), atol=1e-6)
     assert fragile < 0.05 * n and agree >= 0.98 * n
@@ -172,16 +199,6 @@ def test_upsampling_follows_the_relaxation_unless_given():
     assert MLParams(upsampling="8/8").to_dict()["upsampling"] == "8/8"
 
 
-def test_balance_term():
-    model = build_scale(np.repeat(np.arange(4), 16).reshape(8, 8), (4, 4, 4), MLParams(neighborhood=3, scales=1), 0)
-    assert np.all(balance_bias(np.zeros((4, 4, 4)), model, 0.0) == 0)
-    vol = np.zeros((4, 4, 4))  # all label 0, the exemplar has a quarter of each
-    bias = balance_bias(vol, model, 2.0)
-    np.testing.assert_allclose(bias, 2.0 * np.log(0.25 / np.array([1.0, 1e-4, 1e-4, 1e-4])))
-    vol.ravel()[:] = np.repeat(np.arange(4), 16)
-    np.testing.assert_allclose(balance_bias(vol, model, 2.0), 0.0, atol=1e-12)  # matched: no push
-
-
 def test_relaxation_tags_and_floats():
     assert relax_tag(0, 1) == (1 << 28) | 1 and relax_tag(2, 5) == (1 << 28) | (2 << 20) | 5
     assert TAG_INIT not in {relax_tag(lv, s) for lv in range(8) for s in range(64)}
@@ -196,7 +213,8 @@ def test_relaxation_tags_and_floats():
     (dict(relaxation="metropolis"), "relaxation"), (dict(anneal_start=0), "anneal_start"),
     (dict(anneal_start=float("inf")), "anneal_start"), (dict(anneal_cooling=1.0), "anneal_cooling"),
     (dict(anneal_cooling=0), "anneal_cooling"), (dict(sweeps=0), "sweeps"), (dict(sweeps=2.5), "sweeps"),
-    (dict(balance=-1), "balance"), (dict(balance=True), "balance"), (dict(balance="1"), "balance"),
+    (dict(balance=-1), "balance"), (dict(balance=1.5), "balance"), (dict(balance=True), "balance"),
+    (dict(balance="1"), "balance"),
 ])
 def test_bad_relaxation_parameters_name_themselves(kwargs, word):
     with pytest.raises(InputError, match=word):
