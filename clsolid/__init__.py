@@ -5,11 +5,11 @@ Importing clsolid does not touch OpenCL; a device is chosen when a synthesis run
 """
 
 from .api import synthesize
-from .device import Device, list_devices, select_device
+from .core.device import Device, list_devices, select_device
 from .errors import (ClsolidError, DeviceMemoryError, DeviceSkippedWarning, InputError, KernelBuildError,
                      NoDeviceError)
-from .params import HEURISTICS
-from .synth import SweepInfo, SynthesisResult
+from .ml.params import HEURISTICS
+from .ml.driver import SweepInfo, SynthesisResult
 
 __version__ = "0.1.0"
 

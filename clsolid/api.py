@@ -8,8 +8,8 @@ from typing import Callable
 import numpy as np
 
 from .errors import InputError
-from .params import MLParams
-from .synth import SweepInfo, SynthesisResult, check_shape, resolve_seed, run_ml
+from .ml.params import MLParams
+from .ml.driver import SweepInfo, SynthesisResult, check_shape, resolve_seed, run_ml
 
 log = logging.getLogger(__name__)
 
@@ -26,11 +26,11 @@ _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch"
 def make_backend(device, backend_options: dict):
     """The reference back end for ``device="reference"``, else an OpenCL one."""
     if isinstance(device, str) and device.lower() == "reference":
-        from .reference import ReferenceBackend
+        from .ml.reference import ReferenceBackend
 
         return ReferenceBackend()
-    from .cl_backend import CLBackend
-    from .device import select_device
+    from .ml.opencl import CLBackend
+    from .core.device import select_device
 
     return CLBackend(select_device(device), **backend_options)
 
@@ -157,7 +157,7 @@ def synthesize(
         exemplar's label fractions (a departure, as Kopf et al.'s histogram re-weighting):
         after every conflict-free set, a per-label bias on the log score is fitted to the
         scores that set left, so that the voxels still to visit bring the whole volume to
-        the exemplar's fractions at that scale (``clsolid.balance``); beta < 1 aims that
+        the exemplar's fractions at that scale (``clsolid.ml.balance``); beta < 1 aims that
         far from the unbiased fractions. Exact in expectation for Gibbs draws; ICM and
         annealing decide otherwise than by a draw, and keep the fractions less closely.
 

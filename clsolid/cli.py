@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
-from .params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, RELAXATIONS, SLICE_LAYOUTS,
+from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, RELAXATIONS, SLICE_LAYOUTS,
                      UPSAMPLING, MLParams)
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
@@ -166,7 +166,7 @@ def _tracker(levels: int, records: list):
 def cmd_synth(args) -> int:
     from .api import synthesize
     from .preview import save_preview
-    from .synth import preview_depths
+    from .ml.driver import preview_depths
     from .volumeio import save_volume
 
     suffix = args.output.suffix.lower()
@@ -228,7 +228,7 @@ def cmd_synth(args) -> int:
 
 
 def cmd_devices(args) -> int:
-    from .device import list_devices
+    from .core.device import list_devices
 
     devices = list_devices()
     print(f"{'index':<6} {'type':<11} {'compiles':<8} {'vec':>3} {'CUs':>4} {'memory':>10} {'max buffer':>11} {'fp64':<4}  "
@@ -243,7 +243,7 @@ def cmd_devices(args) -> int:
         if not d["compiles"]:
             print(f"{d['index']}: cannot compile kernels: {d['probe_message']}")
     if not any(d["compiles"] for d in devices):
-        from .device import INSTALL_HINT
+        from .core.device import INSTALL_HINT
 
         print(f"No device compiles. {INSTALL_HINT}.")
     return EXIT_OK

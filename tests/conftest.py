@@ -24,7 +24,7 @@ os.environ.setdefault("CLSOLID_CACHE_DIR", tempfile.mkdtemp(prefix="clsolid-cach
 def _device_specs() -> list[str]:
     """Every device that compiles (PoCL and Intel's CPU runtime where both do), as "p:d"."""
     try:
-        from clsolid.device import list_devices
+        from clsolid.core.device import list_devices
 
         devices = list_devices()
     except Exception as exc:  # noqa: BLE001 - reported below
@@ -54,7 +54,7 @@ def device(request):
         if os.environ.get("CI"):
             pytest.fail(f"no OpenCL device on CI: {spec[1:]}")
         pytest.skip(f"no OpenCL device: {spec[1:]}")
-    from clsolid.device import select_device
+    from clsolid.core.device import select_device
 
     if spec not in _DEVICES:
         _DEVICES[spec] = select_device(spec)

@@ -8,7 +8,7 @@ import pytest
 
 import clsolid
 from clsolid import DeviceMemoryError, InputError, NoDeviceError
-from clsolid.params import HEURISTICS, MLParams, canonical_heuristic
+from clsolid.ml.params import HEURISTICS, MLParams, canonical_heuristic
 
 SMALL = dict(neighborhood=3, scales=1, levels=8)
 
@@ -45,7 +45,7 @@ def test_bad_parameters_name_themselves(kwargs, word):
 def test_bandwidth_is_a_fraction_of_silverman_per_scale(brick_labels):
     """Silverman (sigma and site count of each scale, d = k^2) times the factor of the scale:
     0.2 by default, 1 = the thesis."""
-    from clsolid.ml_model import build_scale, scale_exemplar, silverman
+    from clsolid.ml.model import build_scale, scale_exemplar, silverman
 
     cases = (((0.2, 0.2, 0.2), MLParams()), ((1.0, 1.0, 1.0), MLParams(bandwidth_factor=1)),
              ((0.5, 0.3, 2.0), MLParams(bandwidth_factor=[0.5, 0.3, 2])))
@@ -217,7 +217,7 @@ def test_progress_carries_the_scale_exemplar(device):
     clsolid.synthesize("brick", (8, 8, 8), rng=1, device=device, progress=seen.append, neighborhood=3,
                        scales=2, levels=8)
     from clsolid.exemplar import builtin_exemplar, quantise
-    from clsolid.ml_model import scale_exemplar
+    from clsolid.ml.model import scale_exemplar
 
     labels = quantise(builtin_exemplar("brick"), 8)
     np.testing.assert_array_equal(seen[0].exemplar, scale_exemplar(labels, 1, "binomial"))

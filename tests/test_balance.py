@@ -1,4 +1,4 @@
-"""The label-histogram balance (clsolid.balance): the dual projection reaches the target
+"""The label-histogram balance (clsolid.ml.balance): the dual projection reaches the target
 fractions, the sweep target accounts for the voxels left alone, and a run keeps the
 exemplar's fractions where the published form does not."""
 
@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from clsolid.balance import MAX_BIAS, OFF_BIAS, n_score_slots, project_bias, score_stride, softmax, sweep_target
-from clsolid.cl_backend import CLBackend
+from clsolid.ml.balance import MAX_BIAS, OFF_BIAS, n_score_slots, project_bias, score_stride, softmax, sweep_target
+from clsolid.ml.opencl import CLBackend
 from clsolid.gallery import gallery_exemplar
-from clsolid.params import MLParams
-from clsolid.synth import label_fractions, run_ml
+from clsolid.ml.params import MLParams
+from clsolid.ml.driver import label_fractions, run_ml
 
 
 def _scores(seed: int, m: int, n: int, spread: float) -> np.ndarray:

@@ -110,7 +110,7 @@ def test_bad_output_extension(tmp_path, capsys):
 
 
 def test_out_of_memory_exit_code(tmp_path, capsys, device, monkeypatch):
-    from clsolid.device import Device
+    from clsolid.core.device import Device
 
     monkeypatch.setattr(Device, "max_alloc", property(lambda self: 1 << 16))
     assert main(["synth", "-o", str(tmp_path / "v.npy"), "--shape", "64", "64", "64", "-q"]) == EXIT_MEMORY

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import clsolid
-from clsolid import icd, probe
+from clsolid.core import icd, probe
 from clsolid.cli import main
-from clsolid.device import CPU_FIX, list_devices, select_device, type_name
+from clsolid.core.device import CPU_FIX, list_devices, select_device, type_name
 from clsolid.errors import DeviceSkippedWarning, KernelBuildError, NoDeviceError
 
 COMPILER_SAYS = "error: unknown target CPU 'generic'"
@@ -211,7 +211,7 @@ def test_the_real_loader_still_sees_every_platform(tmp_path):
     (vendors / "gpu.icd").write_text("libno-such-gpu-opencl.so\n")
     env = {k: v for k, v in os.environ.items() if k != "OCL_ICD_VENDORS"}
     env.update(OPENCL_VENDOR_PATH=str(vendors), CLSOLID_CACHE_DIR=str(tmp_path / "cache"))
-    code = ("import os, json, clsolid.device as d; names = [p.name for p in d._platforms()]; "
+    code = ("import os, json, clsolid.core.device as d; names = [p.name for p in d._platforms()]; "
             "print(json.dumps([names, os.environ.get('OCL_ICD_VENDORS')]))")
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     names, folder = json.loads(out.stdout.strip().splitlines()[-1])

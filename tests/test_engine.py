@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from clsolid.cl_backend import CLBackend
-from clsolid.params import MLParams
-from clsolid.reference import ReferenceBackend
-from clsolid.synth import run_ml
+from clsolid.ml.opencl import CLBackend
+from clsolid.ml.params import MLParams
+from clsolid.ml.reference import ReferenceBackend
+from clsolid.ml.driver import run_ml
 
 CASES = [  # (neighborhood, views, heuristic, shape, scales)
     (3, 2, "h2-product", (12, 12, 12), 2),
@@ -37,7 +37,7 @@ def test_every_runtime_grows_nearly_the_same_volume(small_labels):
     """PoCL and Intel's CPU runtime (and any other that compiles) agree as each does with float64."""
     from conftest import DEVICE_SPECS, _DEVICES
 
-    from clsolid.device import select_device
+    from clsolid.core.device import select_device
 
     specs = [s for s in DEVICE_SPECS if not s.startswith("!")]
     if len(specs) < 2:
@@ -120,7 +120,7 @@ def test_8_of_8_upsampling_copies_into_all_children(small_labels):
 
 
 def test_exact_ties_go_to_the_lowest_label():
-    from clsolid.reference import decide
+    from clsolid.ml.reference import decide
 
     labels = np.arange(5.0)
     lam = np.arange(5.0)

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from conftest import random_state
 
-from clsolid.cl_backend import CLBackend, group_tables
-from clsolid.ml_model import build_scale
-from clsolid.params import MLParams
-from clsolid.reference import ReferenceBackend
+from clsolid.ml.opencl import CLBackend, group_tables
+from clsolid.ml.model import build_scale
+from clsolid.ml.params import MLParams
+from clsolid.ml.reference import ReferenceBackend
 
 
 def _pair(device, labels_img, shape, vol, temp, **kw):

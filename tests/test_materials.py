@@ -12,7 +12,7 @@ import pytest
 import clsolid
 from clsolid.gallery import gallery_exemplar
 from clsolid.metrics import mirror_correlation
-from clsolid.params import RELAXATIONS
+from clsolid.ml.params import RELAXATIONS
 
 SHAPE = (32, 32, 32)
 FAST: dict = {}

@@ -5,14 +5,14 @@ import sys
 import zipfile
 from pathlib import Path
 
-from clsolid import _kernels
+from clsolid.core import programs
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_kernel_loader_finds_the_sources():
-    assert (_kernels.kernel_dir() / "ml.cl").is_file()
-    assert _kernels.read_source("ml.cl").startswith('#line 1 "kernels/ml.cl"')
+    assert (programs.kernel_dir() / "ml" / "likelihood.cl").is_file()
+    assert programs.read_source("ml/likelihood.cl").startswith('#line 1 "kernels/ml/likelihood.cl"')
 
 
 def test_wheel_contains_the_kernels(tmp_path):
@@ -20,5 +20,5 @@ def test_wheel_contains_the_kernels(tmp_path):
                     "-w", str(tmp_path), str(ROOT)], check=True)
     wheel = next(tmp_path.glob("clsolid-*.whl"))
     names = zipfile.ZipFile(wheel).namelist()
-    assert {"clsolid/kernels/ml.cl", "clsolid/kernels/init.cl"} <= set(names)
+    assert {"clsolid/kernels/ml/likelihood.cl", "clsolid/kernels/core/init.cl"} <= set(names)
     assert "clsolid/cli.py" in names

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from clsolid.philox import TAG_INIT, bounded, philox4x32, seed_key, voxel_uint32
+from clsolid.core.philox import TAG_INIT, bounded, philox4x32, seed_key, voxel_uint32
 
 # Random123's published known-answer vectors for philox4x32, 10 rounds.
 KAT = [
@@ -27,7 +27,7 @@ def test_numpy_philox_vectorises():
 def test_kernel_philox_matches_known_answers(device):
     import pyopencl as cl
 
-    from clsolid import _kernels
+    from clsolid.core import programs
 
     src = """
     #include <pyopencl-random123/philox.cl>
@@ -38,7 +38,7 @@ def test_kernel_philox_matches_known_answers(device):
         philox4x32_ctr_t r = philox4x32(ctr, key);
         for (int j = 0; j < 4; ++j) out[4*i+j] = r.v[j];
     }"""
-    prg = cl.Program(device.context, src).build(options=_kernels.include_options())
+    prg = cl.Program(device.context, src).build(options=programs.include_options())
     c = np.array([k[0] for k in KAT], np.uint32)
     k = np.array([k[1] for k in KAT], np.uint32)
     mf = cl.mem_flags
@@ -52,8 +52,8 @@ def test_kernel_philox_matches_known_answers(device):
 
 
 def test_init_kernel_matches_numpy(device):
-    from clsolid.cl_backend import CLBackend
-    from clsolid.reference import ReferenceBackend
+    from clsolid.ml.opencl import CLBackend
+    from clsolid.ml.reference import ReferenceBackend
 
     pixels = np.arange(37, dtype=np.float64) * 2
     shape = (5, 7, 9)

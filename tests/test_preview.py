@@ -5,9 +5,9 @@ import pytest
 from PIL import Image
 
 from clsolid.errors import InputError
-from clsolid.params import MLParams
+from clsolid.ml.params import MLParams
 from clsolid.preview import PREVIEW_MIN_SIDE, render_preview, save_preview
-from clsolid.synth import far_depth, inserted_depths, preview_depths
+from clsolid.ml.driver import far_depth, inserted_depths, preview_depths
 
 
 def _panel(preview, i):

@@ -5,10 +5,10 @@ import pytest
 from scipy.ndimage import correlate1d
 
 from clsolid.errors import InputError
-from clsolid.ml_model import build_scale, scale_exemplar
-from clsolid.params import MLParams
-from clsolid.reference import ReferenceBackend
-from clsolid.synth import inserted_depths, run_ml, slice_depths
+from clsolid.ml.model import build_scale, scale_exemplar
+from clsolid.ml.params import MLParams
+from clsolid.ml.reference import ReferenceBackend
+from clsolid.ml.driver import inserted_depths, run_ml, slice_depths
 
 
 def _binomial_reference(labels: np.ndarray, level: int) -> np.ndarray:

@@ -8,13 +8,13 @@ import pytest
 from conftest import random_state
 
 from clsolid import InputError
-from clsolid.balance import score_stride
-from clsolid.cl_backend import CLBackend
-from clsolid.ml_model import build_scale
-from clsolid.params import MLParams
-from clsolid.philox import TAG_INIT, relax_tag, unit_float, voxel_words
-from clsolid.reference import ReferenceBackend, normalise, relax
-from clsolid.synth import label_fractions, run_ml
+from clsolid.ml.balance import score_stride
+from clsolid.ml.opencl import CLBackend
+from clsolid.ml.model import build_scale
+from clsolid.ml.params import MLParams
+from clsolid.core.philox import TAG_INIT, relax_tag, unit_float, voxel_words
+from clsolid.ml.reference import ReferenceBackend, normalise, relax
+from clsolid.ml.driver import label_fractions, run_ml
 
 # Whole runs without the balance: its bias is fitted to the scores of each set, float32 on
 # the device and float64 in the reference, and a near-flat fit turns their last-bit

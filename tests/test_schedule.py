@@ -2,8 +2,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from clsolid.ml_model import view_offsets
-from clsolid.schedule import colour_sets, period, set_order, split_by_colour
+from clsolid.ml.model import view_offsets
+from clsolid.core.schedule import colour_sets, period, set_order, split_by_colour
 
 
 def union_offsets(half, views):

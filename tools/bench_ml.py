@@ -20,10 +20,10 @@ import time
 import numpy as np
 
 import clsolid
-from clsolid.cl_backend import CLBackend
+from clsolid.ml.opencl import CLBackend
 from clsolid.exemplar import builtin_exemplar, quantise
-from clsolid.ml_model import build_scale
-from clsolid.params import DEFAULT_BANDWIDTH_FACTOR, MLParams
+from clsolid.ml.model import build_scale
+from clsolid.ml.params import DEFAULT_BANDWIDTH_FACTOR, MLParams
 
 CASES = {"a": ("thesis case, 9x9", 9), "b": ("7x7 variant", 7)}
 

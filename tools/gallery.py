@@ -32,9 +32,9 @@ from clsolid import metrics
 from clsolid.gallery import SIZES, gallery_exemplar, gallery_info, gallery_names
 from clsolid.metrics._common import jsonable
 from clsolid.metrics.symmetry import AXIS_PAIRS
-from clsolid.params import VIEW_SETS, MLParams
+from clsolid.ml.params import VIEW_SETS, MLParams
 from clsolid.preview import render_preview
-from clsolid.synth import inserted_depths, preview_depths
+from clsolid.ml.driver import inserted_depths, preview_depths
 from quality_ml import parse_setting  # beside this script (tools/ is on the path when it runs)
 
 VIEWS = metrics.VIEWS

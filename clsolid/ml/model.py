@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
+from ..errors import InputError
 from .params import VIEW_AXES, MLParams
-from .schedule import colour_sets
+from ..core.schedule import colour_sets
 
 
 def view_offsets(view: str, half: int) -> np.ndarray:

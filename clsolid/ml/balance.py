@@ -1,6 +1,6 @@
 """The label-histogram balance: a per-label bias that makes the expected label fractions
 of the voxels still to visit bring the volume to the exemplar's (the ML method's
-departure for phase fractions; driven by ``clsolid.synth.Balance``).
+departure for phase fractions; driven by ``clsolid.ml.driver.Balance``).
 
 After every conflict-free set the back end hands back each sampled voxel's combined log
 score per label, *without* the bias (``s_v``). The bias ``b`` for what follows is the

@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _kernels
+from ..core import programs
 from .balance import n_score_slots, score_stride
-from .device import Device
-from .errors import DeviceMemoryError, InputError
-from .ml_model import ScaleModel
+from ..core.device import Device
+from ..errors import DeviceMemoryError, InputError
+from .model import ScaleModel
 from .params import MLParams
-from .philox import TAG_INIT, seed_key
-from .probe import VECTOR_WIDTHS, probe
+from ..core.philox import TAG_INIT, seed_key
+from ..core.probe import VECTOR_WIDTHS, probe
 
 _F4 = 4  # bytes per float32 / int32
 
@@ -40,14 +40,14 @@ def group_tables(model: ScaleModel, vw: int):
 
 
 class CLBackend:
-    """Runs the per-voxel work of :func:`clsolid.synth.run_ml` on an OpenCL device.
+    """Runs the per-voxel work of :func:`clsolid.ml.driver.run_ml` on an OpenCL device.
 
     Parameters
     ----------
     device : Device
     vector_width : int or None
         Exemplar sites per vector in the distance kernel (4, 8 or 16); None: the widest
-        the device's compiler handles (found by :func:`clsolid.probe.probe`; 16 on most).
+        the device's compiler handles (found by :func:`clsolid.core.probe.probe`; 16 on most).
     voxels_per_item : int
         Voxel-views per work item; they share each exemplar load.
     local_size : int
@@ -101,7 +101,7 @@ class CLBackend:
     # -- kernels -----------------------------------------------------------------------
     def _kernels(self, model: ScaleModel, n_labels: int) -> dict:
         views, nr = model.offsets.shape[:2]
-        return _kernels.build(self.device, "ml.cl", {
+        return programs.build(self.device, "ml/likelihood.cl", {
             "NR": nr, "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
         })
 
@@ -126,7 +126,7 @@ class CLBackend:
         n = int(np.prod(shape))
         if n * _F4 > self.device.max_alloc:
             raise DeviceMemoryError("volume", n * _F4, self.device.max_alloc)
-        k = _kernels.build(self.device, "init.cl")
+        k = programs.build(self.device, "core/init.cl")
         out = np.empty(n, np.float32)
         buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, out.nbytes)
         key = seed_key(seed)
@@ -231,7 +231,7 @@ class CLBackend:
 
     def scores(self) -> np.ndarray:
         """Combined log scores before the bias, ``(slots, labels)``, of the voxels whose flat
-        index is a multiple of :func:`clsolid.balance.score_stride` (row = index / stride), as
+        index is a multiple of :func:`clsolid.ml.balance.score_stride` (row = index / stride), as
         their last visit left them."""
         import pyopencl as cl
 

@@ -11,7 +11,7 @@ import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
-from .errors import DeviceSkippedWarning, KernelBuildError, NoDeviceError
+from ..errors import DeviceSkippedWarning, KernelBuildError, NoDeviceError
 from .icd import ensure_vendors
 from .probe import probe
 
@@ -38,7 +38,7 @@ class Device:
     device, context, queue
         The ``pyopencl`` objects.
     programs : dict
-        Program cache of this context, keyed by (source, options); see ``clsolid._kernels``.
+        Program cache of this context, keyed by (source, options); see ``clsolid.core.programs``.
     """
 
     device: Any
@@ -106,7 +106,7 @@ def list_devices(*, probe_devices: bool = True) -> list[dict]:
     ----------
     probe_devices : bool
         Also say whether each device compiles and runs clsolid's kernels (see
-        :func:`clsolid.probe.probe`; cached per device and driver version, so only the
+        :func:`clsolid.core.probe.probe`; cached per device and driver version, so only the
         first call builds anything).
 
     Returns

@@ -2,11 +2,11 @@
 
 An OpenCL driver can list a device that cannot build our kernels. PoCL on LLVM 14 lists
 a Zen 5 CPU, then fails every build ("unknown target CPU 'generic'"); on a Zen 4 CPU it
-builds a tiny kernel but aborts the whole process on the 16-wide vectors of ``ml.cl``
+builds a tiny kernel but aborts the whole process on the 16-wide vectors of ``kernels/ml/likelihood.cl``
 ("LLVM ERROR: Cannot emit physreg copy instruction"). So the probe builds a tiny kernel
 and runs it (checking its result), then runs a tiny synthesis at the widest vector
 width that works (16, 8, then 4), each attempt in a child process that an abort cannot
-take down. The answer, with that width, is cached on disk (``clsolid.icd.cache_dir()``)
+take down. The answer, with that width, is cached on disk (``clsolid.core.icd.cache_dir()``)
 and keyed by platform, device, driver and OpenCL versions: a few seconds the first time,
 nothing afterwards.
 """
@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import KernelBuildError
+from ..errors import KernelBuildError
 from .icd import cache_dir
 
 log = logging.getLogger(__name__)
@@ -97,7 +97,7 @@ def _tiny_synthesis(device: Any, vector_width: int) -> None:
     Running matters: PoCL generates the machine code of a kernel at its first launch,
     and that is where LLVM 14 aborts on a Zen 4 CPU.
     """
-    from .api import synthesize
+    from ..api import synthesize
 
     exemplar = np.random.default_rng(0).integers(0, 32, (16, 16)).astype(np.uint8)
     synthesize(exemplar, (4, 4, 4), scales=1, max_sweeps=1, rng=0, device=device, vector_width=vector_width)
@@ -132,7 +132,7 @@ def _in_child(dev: Any, vector_width: int | None) -> ProbeResult:
     env = dict(os.environ)
     with tempfile.TemporaryDirectory(prefix="clsolid-probe-") as scratch:
         env["POCL_CACHE_DIR"] = scratch  # a crashed build must not leave a broken binary in the user's cache
-        args = [sys.executable, "-m", "clsolid.probe", device_key(dev), str(vector_width or 0)]
+        args = [sys.executable, "-m", "clsolid.core.probe", device_key(dev), str(vector_width or 0)]
         try:
             run = subprocess.run(args, env=env, capture_output=True, text=True, timeout=CHILD_TIMEOUT_S)
         except subprocess.TimeoutExpired:
@@ -197,7 +197,7 @@ def probe(dev: Any) -> ProbeResult:
 
 
 def _child_main(key: str, width: int) -> int:
-    """``python -m clsolid.probe KEY WIDTH``: probe the device whose key is KEY; print JSON."""
+    """``python -m clsolid.core.probe KEY WIDTH``: probe the device whose key is KEY; print JSON."""
     from .device import _devices_of, _platforms
 
     for platform in _platforms():

@@ -12,11 +12,11 @@ from typing import Any, Callable
 import numpy as np
 
 from .balance import project_bias, score_stride, softmax, sweep_target
-from .errors import InputError
-from .ml_model import ScaleModel, build_scale, check_exemplar_fits, nearest_label
+from ..errors import InputError
+from .model import ScaleModel, build_scale, check_exemplar_fits, nearest_label
 from .params import DEPTH_AXIS, MLParams
-from .philox import relax_tag
-from .schedule import set_order, split_by_colour
+from ..core.philox import relax_tag
+from ..core.schedule import set_order, split_by_colour
 
 log = logging.getLogger(__name__)
 
@@ -232,7 +232,7 @@ def label_index(values: np.ndarray, labels: np.ndarray) -> np.ndarray:
 
 class Balance:
     """The label-histogram balance of one scale: the bias that keeps the volume's label
-    fractions at the exemplar's (the departure of clsolid.balance).
+    fractions at the exemplar's (the departure of clsolid.ml.balance).
 
     :meth:`after` is called after every conflict-free set and returns the bias for the
     next one, so the bias follows the volume within a sweep: a bias fitted once per sweep
@@ -312,7 +312,7 @@ def run_ml(
     """Run the multi-scale relaxation on quantised exemplar labels with a back end.
 
     Each sweep draws its random numbers from Philox keyed by *seed*, counter (x, y, z,
-    :func:`clsolid.philox.relax_tag` (level, sweep)). Under ``relaxation="annealing"``
+    :func:`clsolid.core.philox.relax_tag` (level, sweep)). Under ``relaxation="annealing"``
     there are no voxel temperatures (every neighbour counts fully, TIP14 Fig. 1) and
     every voxel is visited in every sweep (trusted ones too, unless ``inherited="fixed"``);
     the global temperature t_in starts each scale at ``anneal_start`` and is multiplied by

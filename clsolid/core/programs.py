@@ -6,9 +6,9 @@ import warnings
 from pathlib import Path
 
 from .device import Device
-from .errors import KernelBuildError
+from ..errors import KernelBuildError
 
-_HERE = Path(__file__).resolve().parent
+_PACKAGE = Path(__file__).resolve().parents[1]  # clsolid/
 
 
 def kernel_dir() -> Path:
@@ -17,17 +17,17 @@ def kernel_dir() -> Path:
     A wheel installs them as ``clsolid/kernels``; a source checkout or an editable
     install keeps them in the top-level ``kernels/`` beside the package.
     """
-    for candidate in (_HERE / "kernels", _HERE.parent / "kernels"):
-        if (candidate / "ml.cl").is_file():
+    for candidate in (_PACKAGE / "kernels", _PACKAGE.parent / "kernels"):
+        if (candidate / "ml" / "likelihood.cl").is_file():
             return candidate
     raise FileNotFoundError(
-        f"clsolid's OpenCL kernels were not found in {_HERE / 'kernels'} or "
-        f"{_HERE.parent / 'kernels'}; reinstall clsolid (pip install clsolid)"
+        f"clsolid's OpenCL kernels were not found in {_PACKAGE / 'kernels'} or "
+        f"{_PACKAGE.parent / 'kernels'}; reinstall clsolid (pip install clsolid)"
     )
 
 
 def read_source(name: str) -> str:
-    """Source of ``kernels/<name>`` prefixed by a ``#line`` so errors point at the file."""
+    """Source of ``kernels/<name>`` (e.g. ``"ml/likelihood.cl"``) prefixed by a ``#line`` so errors point at the file."""
     path = kernel_dir() / name
     return f'#line 1 "kernels/{name}"\n' + path.read_text()
 

@@ -6,7 +6,7 @@ import math
 import numbers
 from dataclasses import asdict, dataclass, field
 
-from .errors import InputError
+from ..errors import InputError
 
 #: clsolid name -> (kernel code, thesis tag, paper tag). One table, used by the API, the CLI,
 #: the docs and both back ends. Heuristics that compare LCPDFs across views (all but

@@ -28,7 +28,7 @@ typedef CAT(int, VW) intv;
 /* Scores within TIE_TOL * max(1, |best|) of the best are ties, and the lowest label wins.
  * Exact ties are common (two one-site views centred on levels a and b tie at (a+b)/2);
  * without a tolerance float32 and float64 would break them differently. Must equal
- * clsolid.reference.TIE_TOL. */
+ * clsolid.ml.reference.TIE_TOL. */
 #define TIE_TOL 1e-4f
 
 /* First index whose score is within the tie tolerance of the maximum. */
@@ -333,7 +333,7 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
         }
     }
     __global const floatv *bv = (__global const floatv *)bias;
-    /* The balance needs each kept voxel's combined score without the bias (clsolid.balance). */
+    /* The balance needs each kept voxel's combined score without the bias (clsolid.ml.balance). */
     __global float *keep = voxel % score_stride ? 0 : scores + (size_t)(voxel / score_stride) * n_labels;
 
     float value;

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from .balance import n_score_slots, score_stride
-from .ml_model import ScaleModel
-from .philox import TAG_INIT, bounded, unit_float, voxel_uint32, voxel_words
+from .model import ScaleModel
+from ..core.philox import TAG_INIT, bounded, unit_float, voxel_uint32, voxel_words
 
 _CHUNK = 128  # voxels per vectorised step, to bound memory
 
@@ -126,7 +126,7 @@ def relax(relaxation: str, code: int, logl: np.ndarray, labels: np.ndarray, x: n
 
     ``relaxation`` is ``"icm"`` (argmax), ``"gibbs"`` (a draw from the combined, normalised
     LCPDF) or ``"annealing"`` (a uniform proposal lambda, kept if p = P(lambda)/P(x) > 1 or
-    p * t_in > q). ``words`` ``(m, 4)`` are the voxels' Philox words (see ``kernels/ml.cl``,
+    p * t_in > q). ``words`` ``(m, 4)`` are the voxels' Philox words (see ``kernels/ml/likelihood.cl``,
     ``decide``, for which word serves which draw); ``bias`` ``(L,)`` is added to the combined
     log score (h2) or to each view's (h1). h1 heuristics combine per-view solutions: the
     argmax, a draw from that view, or the proposal where that view alone accepts it.
@@ -166,7 +166,7 @@ def new_temperature(model: ScaleModel, temp: np.ndarray, voxels: np.ndarray, xi:
 
 
 class ReferenceBackend:
-    """The float64 NumPy back end; same interface as :class:`clsolid.cl_backend.CLBackend`."""
+    """The float64 NumPy back end; same interface as :class:`clsolid.ml.opencl.CLBackend`."""
 
     name = "numpy-float64-reference"
 
