@@ -20,5 +20,6 @@ def test_wheel_contains_the_kernels(tmp_path):
                     "-w", str(tmp_path), str(ROOT)], check=True)
     wheel = next(tmp_path.glob("clsolid-*.whl"))
     names = zipfile.ZipFile(wheel).namelist()
-    assert {"clsolid/kernels/ml/likelihood.cl", "clsolid/kernels/core/init.cl"} <= set(names)
+    assert {"clsolid/kernels/ml/likelihood.cl", "clsolid/kernels/core/init.cl",
+            "clsolid/kernels/search/match.cl", "clsolid/search/match.py"} <= set(names)
     assert "clsolid/cli.py" in names

@@ -1,0 +1,159 @@
+"""Exact nearest-neighbourhood search over an exemplar: the table of its neighbourhoods,
+a NumPy float64 reference and the OpenCL matcher (``kernels/search/match.cl``).
+
+A neighbourhood is the k x k square centred on a pixel, read row by row (offsets from
+:func:`square_offsets`); the distance is the weighted sum of squared differences, with
+weight 1 everywhere (full square) or 0 on the centre and the terms after it
+(:func:`causal_weights`, the L-shaped causal neighbourhood). Only exemplar sites whose
+whole square lies inside the exemplar are candidates (thesis_spec §1: no wrap-around in
+the exemplar). The best match is the candidate of least distance, the lowest site index
+on a tie, on the device as in the reference: for integer grey levels every partial sum is
+an integer below 2^24, exact in float32, so the two agree exactly.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..core import programs
+from ..core.device import Device
+from ..errors import DeviceMemoryError, InputError
+
+#: Neighbourhood sides the matcher accepts (odd).
+MIN_SIDE, MAX_SIDE = 3, 31
+
+
+def check_side(k: Any) -> int:
+    """Validate a neighbourhood side: an odd integer in [MIN_SIDE, MAX_SIDE]."""
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not MIN_SIDE <= k <= MAX_SIDE or k % 2 == 0:
+        raise InputError(f"neighborhood={k!r} must be an odd integer in [{MIN_SIDE}, {MAX_SIDE}]")
+    return int(k)
+
+
+def square_offsets(k: int) -> np.ndarray:
+    """``(k*k, 2)`` offsets ``(dy, dx)`` of a k x k square, row by row, centre at row ``k*k // 2``."""
+    r = check_side(k) // 2
+    dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
+    return np.stack([dy.ravel(), dx.ravel()], axis=1)
+
+
+def causal_weights(k: int) -> np.ndarray:
+    """Weights of the L-shaped causal neighbourhood: 1 on the rows above the centre and on
+    the centre row's left half, 0 on the centre and everything after it."""
+    w = np.zeros(check_side(k) ** 2, np.float32)
+    w[: k * k // 2] = 1.0
+    return w
+
+
+def exemplar_table(exemplar: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Every complete k x k neighbourhood of a 2D exemplar.
+
+    Returns
+    -------
+    table : ndarray, float32, ``(n_sites, k*k)``
+        Row s is the neighbourhood of site s, read as :func:`square_offsets`.
+    sites : ndarray, int64, ``(n_sites, 2)``
+        ``(row, column)`` of each site's centre, row-major: ``n_sites = (H-k+1)(W-k+1)``.
+    """
+    ex = np.asarray(exemplar)
+    k = check_side(k)
+    if ex.ndim != 2 or min(ex.shape) < k:
+        raise InputError(f"the exemplar must be a 2D image at least {k} x {k} for a {k} x {k} "
+                         f"neighbourhood; got shape {ex.shape}")
+    windows = np.lib.stride_tricks.sliding_window_view(ex.astype(np.float32), (k, k))
+    table = np.ascontiguousarray(windows.reshape(-1, k * k))
+    r = k // 2
+    rows, cols = np.mgrid[r : ex.shape[0] - r, r : ex.shape[1] - r]
+    return table, np.stack([rows.ravel(), cols.ravel()], axis=1).astype(np.int64)
+
+
+def _check_queries(queries: np.ndarray, dim: int) -> np.ndarray:
+    q = np.asarray(queries)
+    if q.ndim != 2 or q.shape[1] != dim:
+        raise InputError(f"queries must be an (m, {dim}) array of neighbourhoods; got shape {q.shape}")
+    return q
+
+
+def _weights(weights: np.ndarray | None, dim: int) -> np.ndarray:
+    w = np.ones(dim, np.float32) if weights is None else np.asarray(weights, np.float32)
+    if w.shape != (dim,) or not np.all(np.isfinite(w)) or np.any(w < 0):
+        raise InputError(f"weights must be {dim} finite, non-negative numbers; got shape {w.shape}")
+    return w
+
+
+def best_match_reference(queries: np.ndarray, table: np.ndarray,
+                         weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Float64 brute force: for each query the lowest-index site of least weighted SSD.
+
+    Returns ``(site index (m,) int64, distance (m,) float64)``.
+    """
+    t = np.asarray(table, np.float64)
+    q = _check_queries(queries, t.shape[1]).astype(np.float64)
+    w = _weights(weights, t.shape[1]).astype(np.float64)
+    idx = np.empty(q.shape[0], np.int64)
+    dist = np.empty(q.shape[0])
+    for i in range(0, q.shape[0], 256):  # bounded memory: 256 x n_sites distances at a time
+        d = (((q[i : i + 256, None, :] - t[None, :, :]) ** 2) * w).sum(axis=2)
+        idx[i : i + 256] = np.argmin(d, axis=1)  # the first minimum: the lowest index
+        dist[i : i + 256] = d[np.arange(d.shape[0]), idx[i : i + 256]]
+    return idx, dist
+
+
+class CLMatcher:
+    """The exact best match on an OpenCL device, for a fixed table.
+
+    Parameters
+    ----------
+    device : Device
+        From :func:`clsolid.select_device`.
+    table : ndarray, ``(n_sites, dim)``
+        The candidates (:func:`exemplar_table`).
+    weights : ndarray, ``(dim,)``, optional
+        Per-term weights of the distance (default: all 1).
+    max_batch : int
+        Queries per launch.
+    """
+
+    def __init__(self, device: Device, table: np.ndarray, weights: np.ndarray | None = None,
+                 max_batch: int = 65536) -> None:
+        import pyopencl as cl
+
+        self.table = np.ascontiguousarray(table, np.float32)
+        if self.table.ndim != 2 or self.table.shape[0] == 0:
+            raise InputError(f"the table must be a non-empty (n_sites, dim) array; got shape {self.table.shape}")
+        self.device, self.dim, self.max_batch = device, self.table.shape[1], int(max_batch)
+        weights = _weights(weights, self.dim)
+        for name, nbytes in (("match table", self.table.nbytes),
+                             ("match queries", self.max_batch * self.dim * 4)):
+            if nbytes > device.max_alloc:
+                raise DeviceMemoryError(name, nbytes, device.max_alloc)
+        mf = cl.mem_flags
+        ctx = device.context
+        self._table = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=self.table)
+        self._weights = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=weights)
+        self._queries = cl.Buffer(ctx, mf.READ_ONLY, self.max_batch * self.dim * 4)
+        self._site = cl.Buffer(ctx, mf.WRITE_ONLY, self.max_batch * 4)
+        self._dist = cl.Buffer(ctx, mf.WRITE_ONLY, self.max_batch * 4)
+        self._kernel = programs.build(device, "search/match.cl", {"DIM": self.dim})["best_match"]
+
+    def best(self, queries: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """For each query row the lowest-index site of least distance, and that distance.
+
+        Returns ``(site index (m,) int64, distance (m,) float32)``.
+        """
+        import pyopencl as cl
+
+        q = np.ascontiguousarray(_check_queries(queries, self.dim), np.float32)
+        idx, dist = np.empty(q.shape[0], np.int32), np.empty(q.shape[0], np.float32)
+        queue = self.device.queue
+        for i in range(0, q.shape[0], self.max_batch):
+            part = q[i : i + self.max_batch]
+            n = part.shape[0]
+            cl.enqueue_copy(queue, self._queries, part)
+            self._kernel(queue, (n,), None, self._queries, self._table, self._weights, np.int32(n),
+                         np.int32(self.table.shape[0]), self._site, self._dist)
+            cl.enqueue_copy(queue, idx[i : i + n], self._site)
+            cl.enqueue_copy(queue, dist[i : i + n], self._dist)
+        return idx.astype(np.int64), dist

@@ -1,0 +1,109 @@
+"""The exact nearest-neighbourhood matcher of the search methods: the exemplar table, the
+float64 reference, and the OpenCL kernel against it (identical on integer grey levels)."""
+
+import numpy as np
+import pytest
+
+from clsolid import DeviceMemoryError, InputError
+from clsolid.search.match import (CLMatcher, best_match_reference, causal_weights, exemplar_table,
+                                  square_offsets)
+
+
+def _exemplar(seed=0, shape=(24, 28), levels=256):
+    return np.random.default_rng(seed).integers(0, levels, shape).astype(np.uint8)
+
+
+def test_table_holds_every_complete_neighbourhood():
+    ex = _exemplar()
+    table, sites = exemplar_table(ex, 5)
+    assert table.shape == ((24 - 4) * (28 - 4), 25) and table.dtype == np.float32
+    for s in (0, 7, table.shape[0] - 1):
+        r, c = sites[s]
+        np.testing.assert_array_equal(table[s].reshape(5, 5), ex[r - 2 : r + 3, c - 2 : c + 3])
+    off = square_offsets(5)
+    r, c = sites[11]
+    np.testing.assert_array_equal(table[11], ex[r + off[:, 0], c + off[:, 1]])  # the offsets' order
+
+
+def test_causal_weights_are_the_l_shape():
+    w = causal_weights(5).reshape(5, 5)
+    assert w[:2].all() and w[2, :2].all() and not w[2, 2:].any() and not w[3:].any()
+
+
+def test_reference_is_the_brute_force_minimum_with_lowest_index_ties():
+    table = np.array([[1, 1], [0, 0], [0, 0], [5, 5]], np.float32)
+    idx, dist = best_match_reference(np.array([[0.0, 0.0], [4.0, 4.0], [0.5, 0.5]]), table)
+    assert idx.tolist() == [1, 3, 0] and dist.tolist() == [0.0, 2.0, 0.5]  # [0.5, 0.5]: 0, 1 and 2 tie
+    idx, _ = best_match_reference(np.array([[9.0, 0.0]]), table, weights=np.array([0.0, 1.0]))
+    assert idx.tolist() == [1]  # the first term does not count: sites 1 and 2 tie at 0
+
+
+@pytest.mark.parametrize("k, causal", [(3, False), (5, False), (7, True), (9, False)])
+def test_kernel_matches_the_reference_exactly_on_grey_levels(device, k, causal):
+    ex = _exemplar(1, (32, 30))
+    table, _ = exemplar_table(ex, k)
+    rng = np.random.default_rng(k)
+    # queries: exemplar windows with integer noise, as a half-synthesized volume gives
+    queries = table[rng.integers(0, table.shape[0], 500)] + rng.integers(-20, 21, (500, k * k))
+    queries = np.clip(queries, 0, 255)
+    weights = causal_weights(k) if causal else None
+    want_i, want_d = best_match_reference(queries, table, weights)
+    got_i, got_d = CLMatcher(device, table, weights, max_batch=128).best(queries)
+    np.testing.assert_array_equal(got_i, want_i)
+    np.testing.assert_array_equal(got_d, want_d.astype(np.float32))
+
+
+def test_kernel_breaks_ties_to_the_lowest_index(device):
+    ex = np.tile(np.array([[0, 255], [255, 0]], np.uint8), (8, 8))  # a checkerboard: many equal windows
+    table, _ = exemplar_table(ex, 3)
+    queries = table[[5, 6, 9]]
+    want_i, _ = best_match_reference(queries, table)
+    got_i, got_d = CLMatcher(device, table).best(queries)
+    assert got_i.tolist() == want_i.tolist() == [1, 0, 1]  # the first window of its phase (odd, even column)
+    assert not got_d.any()
+
+
+def test_kernel_on_real_valued_data(device):
+    """Float inputs: the indices agree wherever the best is clear of the second best."""
+    rng = np.random.default_rng(3)
+    table = rng.normal(size=(800, 25)).astype(np.float32)
+    queries = rng.normal(size=(300, 25))
+    want_i, want_d = best_match_reference(queries, table)
+    got_i, got_d = CLMatcher(device, table).best(queries)
+    d = (((queries[:, None, :] - table[None].astype(np.float64)) ** 2).sum(axis=2))
+    second = np.sort(d, axis=1)[:, 1]
+    clear = second - want_d > 1e-4 * want_d
+    assert clear.mean() > 0.95
+    np.testing.assert_array_equal(got_i[clear], want_i[clear])
+    np.testing.assert_allclose(got_d, want_d, rtol=1e-5)
+
+
+def test_a_window_of_the_exemplar_finds_itself(device):
+    ex = _exemplar(4)
+    table, sites = exemplar_table(ex, 7)
+    pick = np.array([0, 17, 101, table.shape[0] - 1])
+    idx, dist = CLMatcher(device, table).best(table[pick])
+    assert idx.tolist() == pick.tolist() and not dist.any()  # random grey levels: no repeats
+
+
+@pytest.mark.parametrize("call, word", [
+    (lambda: exemplar_table(_exemplar(), 4), "odd"),
+    (lambda: exemplar_table(_exemplar(), 33), "odd"),
+    (lambda: exemplar_table(_exemplar(shape=(6, 40)), 7), "at least 7 x 7"),
+    (lambda: exemplar_table(np.zeros((8, 8, 3)), 3), "2D"),
+    (lambda: best_match_reference(np.zeros((2, 8)), np.zeros((4, 9))), r"\(m, 9\)"),
+    (lambda: best_match_reference(np.zeros((2, 9)), np.zeros((4, 9)), np.full(9, -1.0)), "non-negative"),
+])
+def test_bad_input_says_what_is_wrong(call, word):
+    with pytest.raises(InputError, match=word):
+        call()
+
+
+def test_a_table_beyond_the_device_is_refused_before_allocating(device):
+    class Small:  # the device, with a tiny allocation limit
+        def __getattr__(self, name):
+            return getattr(device, name)
+        max_alloc = 1000
+
+    with pytest.raises(DeviceMemoryError, match="match table"):
+        CLMatcher(Small(), np.zeros((100, 25), np.float32))
