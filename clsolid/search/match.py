@@ -19,8 +19,13 @@ import numpy as np
 
 from ..core import programs
 from ..core.device import Device
+from ..core.probe import VECTOR_WIDTHS, probe
 from ..errors import DeviceMemoryError, InputError
 
+#: Value of the padding candidates: its square overflows float32 to +inf, so it never wins.
+PAD = 1e19
+#: Work-group size of the matcher (queries a group scans the table with).
+LOCAL = 64
 #: Neighbourhood sides the matcher accepts (odd).
 MIN_SIDE, MAX_SIDE = 3, 31
 
@@ -125,18 +130,22 @@ class CLMatcher:
             raise InputError(f"the table must be a non-empty (n_sites, dim) array; got shape {self.table.shape}")
         self.device, self.dim, self.max_batch = device, self.table.shape[1], int(max_batch)
         weights = _weights(weights, self.dim)
-        for name, nbytes in (("match table", self.table.nbytes),
+        for name, nbytes in (("match table", self.table.nbytes + 16 * self.dim * 4),
                              ("match queries", self.max_batch * self.dim * 4)):
             if nbytes > device.max_alloc:
                 raise DeviceMemoryError(name, nbytes, device.max_alloc)
+        vw = probe(device.device).vector_width or VECTOR_WIDTHS[0]
+        self.n_pad = -(-self.table.shape[0] // vw) * vw
+        table_t = np.full((self.dim, self.n_pad), PAD, np.float32)  # sites along the vectors
+        table_t[:, : self.table.shape[0]] = self.table.T
         mf = cl.mem_flags
         ctx = device.context
-        self._table = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=self.table)
+        self._table = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=table_t)
         self._weights = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=weights)
         self._queries = cl.Buffer(ctx, mf.READ_ONLY, self.max_batch * self.dim * 4)
         self._site = cl.Buffer(ctx, mf.WRITE_ONLY, self.max_batch * 4)
         self._dist = cl.Buffer(ctx, mf.WRITE_ONLY, self.max_batch * 4)
-        self._kernel = programs.build(device, "search/match.cl", {"DIM": self.dim})["best_match"]
+        self._kernel = programs.build(device, "search/match.cl", {"DIM": self.dim, "VW": vw})["best_match"]
 
     def best(self, queries: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """For each query row the lowest-index site of least distance, and that distance.
@@ -152,8 +161,9 @@ class CLMatcher:
             part = q[i : i + self.max_batch]
             n = part.shape[0]
             cl.enqueue_copy(queue, self._queries, part)
-            self._kernel(queue, (n,), None, self._queries, self._table, self._weights, np.int32(n),
-                         np.int32(self.table.shape[0]), self._site, self._dist)
+            # explicit work-groups: CPU runtimes vectorise across the queries of a group
+            self._kernel(queue, (-(-n // LOCAL) * LOCAL,), (LOCAL,), self._queries, self._table, self._weights, np.int32(n),
+                         np.int32(self.n_pad), self._site, self._dist)
             cl.enqueue_copy(queue, idx[i : i + n], self._site)
             cl.enqueue_copy(queue, dist[i : i + n], self._dist)
         return idx.astype(np.int64), dist

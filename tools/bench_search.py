@@ -1,0 +1,66 @@
+"""Benchmark of the search methods' exact matcher (clsolid.search.match), the brute force
+that issue 11's methods and their accelerated searches are measured against.
+
+Matches random queries (exemplar windows plus noise, as a half-synthesized volume gives)
+against every complete neighbourhood of brick 64x64 at 32 grey levels, on the device and,
+on a sample, with the NumPy float64 reference. Prints candidate distances per second, the
+neighbourhood terms per second (3 flops a term: subtract, multiply, accumulate) and,
+measured in the same run, NumPy's float32 matmul FLOP rate as the reference. Timings
+only: nothing here asserts on speed.
+
+    python tools/bench_search.py                       # 7x7 (ch5_np_common), default device
+    python tools/bench_search.py --neighborhood 11 --device pocl
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from bench_ml import matmul_gflops
+
+import clsolid
+from clsolid.exemplar import builtin_exemplar, quantise
+from clsolid.search.match import CLMatcher, best_match_reference, exemplar_table
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--neighborhood", type=int, default=7, help="side of the square (default 7)")
+    ap.add_argument("--queries", type=int, default=32768, help="queries per timed launch (default 32768)")
+    ap.add_argument("--reference-queries", type=int, default=256,
+                    help="queries the float64 reference times and checks (default 256)")
+    ap.add_argument("--device", default=None)
+    args = ap.parse_args(argv)
+    device = clsolid.select_device(args.device)
+    k = args.neighborhood
+    ex = quantise(builtin_exemplar("brick"), 32)
+    table, _ = exemplar_table(ex, k)
+    rng = np.random.default_rng(1)
+    queries = table[rng.integers(0, table.shape[0], args.queries)] + rng.integers(-3, 4, (args.queries, k * k))
+    ref = matmul_gflops()
+    print(f"device: {device.name}")
+    print(f"reference: NumPy float32 matmul {ref:.1f} GFLOP/s (best of 5, 2048^2)")
+    print(f"brick 64x64, 32 levels, {k}x{k}: {table.shape[0]} candidate sites, {args.queries} queries")
+    matcher = CLMatcher(device, table, max_batch=args.queries)
+    matcher.best(queries[:64])  # warm: the build and first launch are not the search
+    best = np.inf
+    for _ in range(3):
+        t = time.perf_counter()
+        got, _ = matcher.best(queries)
+        best = min(best, time.perf_counter() - t)
+    pairs = args.queries * table.shape[0] / best
+    terms = pairs * k * k
+    print(f"device: {best * 1e3:.1f} ms; {pairs / 1e9:.2f} G candidate distances/s = {terms / 1e9:.2f} G terms/s "
+          f"= {3 * terms / 1e9:.1f} GFLOP/s = {100 * 3 * terms / 1e9 / ref:.0f} % of matmul")
+    n = min(args.reference_queries, args.queries)
+    t = time.perf_counter()
+    want, _ = best_match_reference(queries[:n], table)
+    ref_s = time.perf_counter() - t
+    print(f"float64 reference: {n * table.shape[0] / ref_s / 1e6:.1f} M candidate distances/s; "
+          f"same site on {np.mean(got[:n] == want):.2%} of {n} queries")
+
+
+if __name__ == "__main__":
+    main()
