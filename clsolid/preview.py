@@ -11,7 +11,7 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 from .errors import InputError
-from .ml.params import DEPTH_AXIS
+from .core.views import DEPTH_AXIS
 from .volumeio import PathLike, _as_path, _check_volume, _suffix
 
 #: Smallest long side, in pixels, of every preview panel (small blocks are enlarged).

@@ -6,6 +6,7 @@ import math
 import numbers
 from dataclasses import asdict, dataclass, field
 
+from ..core.views import DEPTH_AXIS, VIEW_AXES, VIEW_SETS  # noqa: F401 (this method's names too)
 from ..errors import InputError
 
 #: clsolid name -> (kernel code, thesis tag, paper tag). One table, used by the API, the CLI,
@@ -28,13 +29,6 @@ for _name, (_code, _thesis, _paper) in HEURISTICS.items():
     if _paper:
         _ALIASES[_paper.lower()] = _name
 
-#: View name -> (volume axis of the exemplar rows, volume axis of the exemplar columns).
-#: Axes are 0 = z, 1 = y, 2 = x. Front and right share y, the stacking axis of laminar
-#: textures; top is the (z, x) plane.
-VIEW_AXES: dict[str, tuple[int, int]] = {"front": (1, 2), "right": (1, 0), "top": (0, 2)}
-#: View name -> the volume axis its slices are stacked along (front: z, right: x, top: y).
-DEPTH_AXIS: dict[str, int] = {"front": 0, "right": 2, "top": 1}
-VIEW_SETS: dict[int, tuple[str, ...]] = {2: ("front", "right"), 3: ("front", "right", "top")}
 
 UPSAMPLING = ("1/8", "8/8")
 #: Where the +in slices go. "aligned": the same depths and tiling in every view (so the start,

@@ -147,13 +147,16 @@ class CLMatcher:
         self._dist = cl.Buffer(ctx, mf.WRITE_ONLY, self.max_batch * 4)
         self._kernel = programs.build(device, "search/match.cl", {"DIM": self.dim, "VW": vw})["best_match"]
 
-    def best(self, queries: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def best(self, queries: np.ndarray, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """For each query row the lowest-index site of least distance, and that distance.
 
+        *weights*, if given, replace the distance's per-term weights from now on.
         Returns ``(site index (m,) int64, distance (m,) float32)``.
         """
         import pyopencl as cl
 
+        if weights is not None:
+            cl.enqueue_copy(self.device.queue, self._weights, _weights(weights, self.dim))
         q = np.ascontiguousarray(_check_queries(queries, self.dim), np.float32)
         idx, dist = np.empty(q.shape[0], np.int32), np.empty(q.shape[0], np.float32)
         queue = self.device.queue
@@ -167,3 +170,16 @@ class CLMatcher:
             cl.enqueue_copy(queue, idx[i : i + n], self._site)
             cl.enqueue_copy(queue, dist[i : i + n], self._dist)
         return idx.astype(np.int64), dist
+
+
+class ReferenceMatcher:
+    """:class:`CLMatcher`'s interface on :func:`best_match_reference` (float64, for tests)."""
+
+    def __init__(self, table: np.ndarray, weights: np.ndarray | None = None) -> None:
+        self.table = np.asarray(table, np.float32)
+        self.weights = _weights(weights, self.table.shape[1])
+
+    def best(self, queries: np.ndarray, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        if weights is not None:
+            self.weights = _weights(weights, self.table.shape[1])
+        return best_match_reference(queries, self.table, self.weights)

@@ -1,0 +1,71 @@
+"""Neighbourhood features of the search methods: the k x k square of a level, plus the 3 x 3
+square of the coarser level around the parent position (the multi-resolution neighbourhood,
+thesis_spec §1.3), for exemplar sites and for voxels in one view plane.
+
+Layout of a feature row: the k*k square read row by row (the centre at ``k*k // 2``), then,
+with a parent level, its 3 x 3 square read row by row. Exemplar sites count only where both
+squares lie inside their images (no wrap-around in the exemplar, thesis_spec §1.4); the
+volume wraps on every axis (toroidal output).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..core.views import VIEW_AXES
+from ..errors import InputError
+from .match import square_offsets
+
+PARENT_SIDE = 3
+
+
+def feature_size(k: int, parent: bool) -> int:
+    return k * k + (PARENT_SIDE**2 if parent else 0)
+
+
+def centre_weights(k: int, parent: bool, centre: bool) -> np.ndarray:
+    """Weights of the squared distance: 1 on every term, the centre's 0 unless *centre*."""
+    w = np.ones(feature_size(k, parent), np.float32)
+    if not centre:
+        w[k * k // 2] = 0.0
+    return w
+
+
+def exemplar_features(fine: np.ndarray, coarse: np.ndarray | None, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Feature rows ``(n_sites, dim)`` and centre values ``(n_sites,)`` of every valid site of
+    the level image *fine* (with *coarse*, the next pyramid level, as parent), row-major."""
+    h = k // 2
+    rows, cols = np.mgrid[h : max(h, fine.shape[0] - h), h : max(h, fine.shape[1] - h)]
+    r, c = rows.ravel(), cols.ravel()
+    if coarse is not None:  # the parent square must fit too
+        ok = ((r // 2 >= 1) & (r // 2 + 1 < coarse.shape[0]) & (c // 2 >= 1) & (c // 2 + 1 < coarse.shape[1]))
+        r, c = r[ok], c[ok]
+    if r.size == 0:
+        raise InputError(f"a {fine.shape[0]}x{fine.shape[1]} pyramid level has no complete {k}x{k} "
+                         "neighbourhood: use fewer levels or a smaller neighborhood")
+    off = square_offsets(k)
+    parts = [fine[r[:, None] + off[:, 0], c[:, None] + off[:, 1]]]
+    if coarse is not None:
+        po = square_offsets(PARENT_SIDE)
+        parts.append(coarse[r[:, None] // 2 + po[:, 0], c[:, None] // 2 + po[:, 1]])
+    return np.ascontiguousarray(np.concatenate(parts, axis=1), np.float32), fine[r, c]
+
+
+def voxel_features(volume: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray, view: str,
+                   k: int) -> np.ndarray:
+    """Feature rows ``(m, dim)`` of flat *voxels* of *volume* in *view* (toroidal), with the
+    coarser level's volume *coarse* as parent (its square around ``(z//2, y//2, x//2)``)."""
+    row_axis, col_axis = VIEW_AXES[view]
+    pos = np.stack(np.unravel_index(voxels, volume.shape))  # (3, m)
+    parts = [_square(volume, pos, row_axis, col_axis, k)]
+    if coarse is not None:
+        parts.append(_square(coarse, pos // 2, row_axis, col_axis, PARENT_SIDE))
+    return np.concatenate(parts, axis=1)
+
+
+def _square(vol: np.ndarray, pos: np.ndarray, row_axis: int, col_axis: int, k: int) -> np.ndarray:
+    off = square_offsets(k)
+    idx = [np.broadcast_to((pos[a] % vol.shape[a])[:, None], (pos.shape[1], off.shape[0])) for a in range(3)]
+    idx[row_axis] = (pos[row_axis][:, None] + off[:, 0]) % vol.shape[row_axis]
+    idx[col_axis] = (pos[col_axis][:, None] + off[:, 1]) % vol.shape[col_axis]
+    return vol[tuple(idx)]

@@ -1,0 +1,73 @@
+"""Parameters of the fixed-neighbourhood search methods (thesis_spec §1), validated on construction."""
+
+from __future__ import annotations
+
+import numbers
+from dataclasses import asdict, dataclass
+
+from ..core.views import VIEW_SETS
+from ..errors import InputError
+from .match import check_side
+
+#: The search methods implemented so far (issue 11 adds "kopf" and "chen-wang").
+METHODS = ("wl",)
+
+
+def _int_in(name: str, value, lo: int, hi: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not lo <= value <= hi:
+        raise InputError(f"{name}={value!r} must be an integer in [{lo}, {hi}]")
+    return int(value)
+
+
+@dataclass(frozen=True)
+class SearchParams:
+    """Every parameter of a search method.
+
+    Attributes
+    ----------
+    method : {"wl"}
+        ``"wl"``: Wei-Levoy extended to 2D->3D (thesis_spec §1.6.1): each view's best
+        match, averaged; repeated per voxel with the centre included until the matches
+        stop changing.
+    neighborhood : int
+        Side of the full square (odd; the thesis uses 5-11; default 7, ``ch5_np_common``).
+    levels : int
+        Gaussian pyramid levels of exemplar and volume (default 3).
+    iterations : int
+        Passes over every voxel at each level (default 10).
+    views : {2, 3}
+        Constrained views: front + right, or all three.
+    inner : int
+        Most searches per voxel and pass for ``wl``'s inner repetition (the thesis: "about
+        four"); 1 = a single search.
+    parent : bool
+        Multi-resolution neighbourhood: the k x k square plus the 3 x 3 square of the
+        coarser level (Wei & Levoy; thesis_spec §1.3). Ignored at the coarsest level.
+    """
+
+    method: str = "wl"
+    neighborhood: int = 7
+    levels: int = 3
+    iterations: int = 10
+    views: int = 2
+    inner: int = 4
+    parent: bool = True
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise InputError(f"method={self.method!r} must be one of {', '.join(map(repr, METHODS))}")
+        check_side(self.neighborhood)
+        _int_in("levels", self.levels, 1, 8)
+        _int_in("iterations", self.iterations, 1, 1000)
+        _int_in("inner", self.inner, 1, 100)
+        if self.views not in VIEW_SETS:
+            raise InputError(f"views={self.views!r} must be 2 (front + right) or 3 (front + right + top)")
+        if not isinstance(self.parent, bool):
+            raise InputError(f"parent={self.parent!r} must be True or False")
+
+    @property
+    def view_names(self) -> tuple[str, ...]:
+        return VIEW_SETS[self.views]
+
+    def to_dict(self) -> dict:
+        return asdict(self)

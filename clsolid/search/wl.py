@@ -1,0 +1,101 @@
+"""Wei-Levoy extended to 2D->3D (NP_WL, thesis_spec §1.6.1), coarse to fine.
+
+At each pyramid level the volume starts as noise drawn from that level's exemplar pixels
+(Wei & Levoy's reading of the multi-resolution scheme, thesis_spec §1.3 (a)); the coarser
+level's result enters only through the parent square of every neighbourhood. One pass
+visits every voxel once, conflict-free set by conflict-free set in a seeded order, so a
+pass equals a sequential one in that order. At a voxel, each constrained view's
+neighbourhood (centre left out) is matched exactly against every exemplar site; the voxel
+takes the mean of the matched centre values; then, up to ``inner - 1`` more times, the
+search is repeated with the centre term included, until every view's match is unchanged.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Callable
+
+import numpy as np
+
+from ..core.schedule import colour_sets, set_order, split_by_colour
+from ..errors import InputError
+from .features import centre_weights, exemplar_features, voxel_features
+from .params import SearchParams
+from .pyramid import gaussian_pyramid
+
+
+def level_shapes(shape: tuple[int, int, int], levels: int) -> list[tuple[int, int, int]]:
+    """Volume shape at each level, finest first (halved, rounded down, per level)."""
+    out = [tuple(int(n) for n in shape)]
+    for _ in range(levels - 1):
+        out.append(tuple(max(1, n // 2) for n in out[-1]))
+    return out
+
+
+def run_wl(exemplar: np.ndarray, shape: tuple[int, int, int], params: SearchParams, seed: int,
+           make_matcher: Callable[[np.ndarray], Any],
+           progress: Callable[[dict], None] | None = None) -> tuple[np.ndarray, dict]:
+    """Grow a ``shape`` block from a 2D *exemplar* (float grey levels) with NP_WL.
+
+    *make_matcher(table)* returns an object with ``best(queries, weights)`` (a
+    :class:`~clsolid.search.match.CLMatcher` or :class:`~clsolid.search.match.ReferenceMatcher`).
+    Returns the float64 volume and timings.
+    """
+    k = params.neighborhood
+    shapes = level_shapes(shape, params.levels)
+    if min(shapes[-1]) < 2:
+        raise InputError(f"shape={tuple(shape)} is too small for {params.levels} levels")
+    pyr = gaussian_pyramid(exemplar, params.levels)
+    timings: dict = {"levels": []}
+    t0 = time.perf_counter()
+    coarse = None
+    for level in range(params.levels - 1, -1, -1):
+        t_level = time.perf_counter()
+        parent_img = pyr[level + 1] if params.parent and level + 1 < params.levels else None
+        table, centres = exemplar_features(pyr[level], parent_img, k)
+        use_parent = parent_img is not None
+        matcher = make_matcher(table)
+        w_first = centre_weights(k, use_parent, centre=False)
+        w_again = centre_weights(k, use_parent, centre=True)
+        rng = np.random.default_rng([seed, level])
+        vol = rng.choice(pyr[level].ravel(), size=shapes[level])
+        colour, n_sets = colour_sets(shapes[level], k // 2)
+        sets = split_by_colour(np.ones(shapes[level], bool), colour, n_sets)
+        searches = 0
+        for it in range(1, params.iterations + 1):
+            for c in set_order(n_sets, seed, level, it):
+                searches += _update(vol, coarse if use_parent else None, sets[c], params, matcher,
+                                    centres, w_first, w_again)
+            if progress is not None:
+                progress({"level": level, "iteration": it, "iterations": params.iterations,
+                          "elapsed": time.perf_counter() - t0})
+        timings["levels"].append({"level": level, "shape": list(shapes[level]), "n_sites": int(table.shape[0]),
+                                  "searches": searches, "seconds": time.perf_counter() - t_level})
+        coarse = vol
+    timings["total_s"] = time.perf_counter() - t0
+    return coarse, timings
+
+
+def _update(vol: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray, params: SearchParams,
+            matcher: Any, centres: np.ndarray, w_first: np.ndarray, w_again: np.ndarray) -> int:
+    """One conflict-free set: search, average, and the inner repetition. Returns the searches made."""
+    k, views = params.neighborhood, params.view_names
+    flat = vol.reshape(-1)
+
+    def matches(vox: np.ndarray, weights: np.ndarray) -> np.ndarray:
+        return np.stack([matcher.best(voxel_features(vol, coarse, vox, v, k), weights)[0] for v in views])
+
+    sites = matches(voxels, w_first)  # (views, m)
+    flat[voxels] = centres[sites].mean(axis=0)
+    searches = sites.size
+    todo = np.arange(voxels.size)
+    for _ in range(params.inner - 1):
+        again = matches(voxels[todo], w_again)
+        searches += again.size
+        moved = np.any(again != sites[:, todo], axis=0)
+        if not moved.any():
+            break
+        todo = todo[moved]
+        sites[:, todo] = again[:, moved]
+        flat[voxels[todo]] = centres[sites[:, todo]].mean(axis=0)
+    return searches

@@ -1,0 +1,129 @@
+"""NP_WL (clsolid.search.wl): features and pyramid against direct loops, the OpenCL run
+against the float64 reference, determinism by seed, the inner repetition, and a statistic
+that the published method must improve on its noise start."""
+
+import numpy as np
+import pytest
+
+from clsolid import InputError
+from clsolid.core.views import VIEW_AXES
+from clsolid.gallery import gallery_exemplar
+from clsolid.search.features import centre_weights, exemplar_features, voxel_features
+from clsolid.search.match import CLMatcher, ReferenceMatcher
+from clsolid.search.params import SearchParams
+from clsolid.search.pyramid import gaussian_pyramid
+from clsolid.search.wl import level_shapes, run_wl
+
+
+def _exemplar(size=24, seed=0):
+    return np.random.default_rng(seed).integers(0, 256, (size, size)).astype(np.float64)
+
+
+def test_exemplar_features_are_the_windows_and_their_parents():
+    fine, coarse = _exemplar(20), _exemplar(10, 1)
+    table, centres = exemplar_features(fine, coarse, 5)
+    # valid sites: the 5x5 window inside fine and the 3x3 parent window inside coarse
+    sites = [(r, c) for r in range(2, 18) for c in range(2, 18) if 1 <= r // 2 <= 8 and 1 <= c // 2 <= 8]
+    assert table.shape == (len(sites), 25 + 9)
+    for s in (0, 5, len(sites) - 1):
+        r, c = sites[s]
+        np.testing.assert_array_equal(table[s, :25], fine[r - 2 : r + 3, c - 2 : c + 3].ravel())
+        np.testing.assert_array_equal(table[s, 25:], coarse[r // 2 - 1 : r // 2 + 2, c // 2 - 1 : c // 2 + 2].ravel())
+        assert centres[s] == fine[r, c]
+
+
+@pytest.mark.parametrize("view", ["front", "right", "top"])
+def test_voxel_features_wrap_in_the_view_plane(view):
+    rng = np.random.default_rng(2)
+    vol, coarse = rng.random((6, 7, 8)), rng.random((3, 3, 4))
+    voxels = np.array([0, 17, 6 * 7 * 8 - 1])
+    got = voxel_features(vol, coarse, voxels, view, 3)
+    ra, ca = VIEW_AXES[view]
+    for row, v in zip(got, voxels):
+        pos = np.unravel_index(v, vol.shape)
+        want = []
+        for src, p, side in ((vol, pos, 3), (coarse, tuple(q // 2 for q in pos), 3)):
+            for dr in (-1, 0, 1):
+                for dc in (-1, 0, 1):
+                    q = [a % n for a, n in zip(p, src.shape)]  # odd sides: the parent wraps too
+                    q[ra] = (q[ra] + dr) % src.shape[ra]
+                    q[ca] = (q[ca] + dc) % src.shape[ca]
+                    want.append(src[tuple(q)])
+        np.testing.assert_array_equal(row, want)
+
+
+def test_pyramid_filters_then_halves():
+    ex = _exemplar(32)
+    pyr = gaussian_pyramid(ex, 3)
+    assert [p.shape for p in pyr] == [(32, 32), (16, 16), (8, 8)]
+    np.testing.assert_allclose(gaussian_pyramid(np.full((16, 16), 7.0), 2)[1], 7.0)
+    impulse = np.zeros((9, 9))
+    impulse[4, 4] = 256.0
+    blurred = gaussian_pyramid(impulse, 2)[1]  # the [1 4 6 4 1]/16 kernel, sampled on even pixels
+    np.testing.assert_allclose(blurred[2, 1:4], 256 * (6 / 16) * np.array([1, 6, 1]) / 16)
+    assert level_shapes((10, 12, 14), 3) == [(10, 12, 14), (5, 6, 7), (2, 3, 3)]
+
+
+def test_centre_weights():
+    w = centre_weights(3, True, centre=False)
+    assert w.size == 18 and w[4] == 0 and w.sum() == 17
+    assert centre_weights(3, False, centre=True).tolist() == [1.0] * 9
+
+
+@pytest.mark.parametrize("views, k, parent", [(2, 5, True), (3, 3, True), (2, 3, False)])
+def test_opencl_run_matches_the_reference(device, views, k, parent):
+    ex = _exemplar(24)
+    params = SearchParams(neighborhood=k, levels=2, iterations=2, views=views, parent=parent)
+    ref, ref_t = run_wl(ex, (10, 12, 14), params, 3, ReferenceMatcher)
+    got, got_t = run_wl(ex, (10, 12, 14), params, 3, lambda t: CLMatcher(device, t))
+    agree = np.mean(np.isclose(ref, got, rtol=0, atol=1e-9))
+    assert agree >= 0.99, f"only {agree:.2%} of voxels agree with the float64 reference"
+    if views == 2:  # halves of integers: every distance exact in float32, so the runs are equal
+        np.testing.assert_array_equal(got, ref)
+        assert [lv["searches"] for lv in got_t["levels"]] == [lv["searches"] for lv in ref_t["levels"]]
+
+
+def test_same_seed_same_volume(device):
+    ex = _exemplar(24)
+    params = SearchParams(neighborhood=3, levels=2, iterations=2)
+    run = lambda seed: run_wl(ex, (8, 8, 8), params, seed, lambda t: CLMatcher(device, t))[0]  # noqa: E731
+    a = run(5)
+    np.testing.assert_array_equal(a, run(5))
+    assert np.mean(a != run(6)) > 0.5
+
+
+def test_inner_repetition_counts_its_searches():
+    ex = _exemplar(20)
+    once = run_wl(ex, (8, 8, 8), SearchParams(neighborhood=3, levels=1, iterations=2, inner=1), 1, ReferenceMatcher)[1]
+    assert once["levels"][0]["searches"] == 2 * 512 * 2  # views x voxels x passes
+    again = run_wl(ex, (8, 8, 8), SearchParams(neighborhood=3, levels=1, iterations=2, inner=4), 1, ReferenceMatcher)[1]
+    assert 2 * 512 * 2 < again["levels"][0]["searches"] <= 4 * 2 * 512 * 2
+
+
+def test_wl_grows_structure_from_noise(device):
+    """porous80's front slices: neighbouring voxels differ about as often as the exemplar's
+    pixels, while the noise WL starts from differs far more often (no structure)."""
+    ex = (gallery_exemplar("porous80", 64) > 0).astype(np.float64)
+    vol, _ = run_wl(ex, (16, 16, 16), SearchParams(iterations=3), 1, lambda t: CLMatcher(device, t))
+
+    def jumps(img):  # fraction of horizontal neighbours on different phases
+        return np.mean(np.abs(np.diff(img, axis=-1)) > 0.5)
+
+    noise = np.random.default_rng(0).permutation(ex.ravel()).reshape(ex.shape)
+    assert jumps(noise) > 2.5 * jumps(ex)  # the statistic separates noise from the material
+    assert jumps(vol) < 1.6 * jumps(ex), (jumps(vol), jumps(ex))
+
+
+@pytest.mark.parametrize("kwargs, word", [
+    (dict(method="kopf"), "method"), (dict(neighborhood=6), "odd"), (dict(levels=0), "levels"),
+    (dict(iterations=0), "iterations"), (dict(views=4), "views"), (dict(inner=0), "inner"),
+    (dict(parent=1), "parent"),
+])
+def test_bad_parameters_name_themselves(kwargs, word):
+    with pytest.raises(InputError, match=word):
+        SearchParams(**kwargs)
+
+
+def test_too_many_levels_for_the_exemplar_is_an_input_error():
+    with pytest.raises(InputError, match="fewer levels"):
+        run_wl(_exemplar(16), (16, 16, 16), SearchParams(neighborhood=7, levels=3), 1, ReferenceMatcher)
