@@ -13,10 +13,14 @@ from .ml.driver import SweepInfo, SynthesisResult, check_shape, resolve_seed, ru
 
 log = logging.getLogger(__name__)
 
-METHODS = ("ml",)
+METHODS = ("ml", "wl")
 #: What :func:`synthesize` returns: the exemplar's own values, or the engine's level indices.
 OUTPUTS = ("values", "labels")
-PLANNED_METHODS = ("wl", "kopf", "chen-wang")
+PLANNED_METHODS = ("kopf", "chen-wang")
+#: Options of the search methods (clsolid.search.params.SearchParams).
+_SEARCH_OPTIONS = ("iterations", "inner", "parent", "init")
+#: The neighbourhood side each method uses when none is given (ML: the thesis case; WL: ch5_np_common).
+DEFAULT_NEIGHBORHOOD = {"ml": 9, "wl": 7}
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance")
@@ -40,8 +44,8 @@ def synthesize(
     shape,
     *,
     method: str = "ml",
-    heuristic: str = "h2-product",
-    neighborhood: int = 9,
+    heuristic: str | None = None,
+    neighborhood: int | None = None,
     scales: int = 3,
     views: int = 2,
     levels: int | None = 32,
@@ -76,10 +80,17 @@ def synthesize(
         textures, top-left 256x256 area-averaged to 64x64; option ``builtin_size``).
     shape : tuple of 3 ints
         ``(Z, Y, X)`` size of the block. Output is toroidal (tileable); any sizes work.
-    method : {"ml"}
-        Only the maximum-likelihood method exists so far.
-    heuristic : str
-        How the per-view LCPDFs are combined (default ``"h2-product"``):
+    method : {"ml", "wl"}
+        ``"ml"``: the maximum-likelihood method (default). ``"wl"``: Wei-Levoy extended
+        to 2D->3D (thesis_spec §1.6.1): every view's exact best match, averaged, over a
+        Gaussian pyramid; its options are ``iterations`` (passes per scale, default 10),
+        ``inner`` (most searches per voxel and pass, default 4), ``parent`` (the coarser
+        scale's 3x3 in every neighbourhood, default True) and ``init`` (``"upsample"``,
+        default, or ``"noise"``); it returns float64 means of exemplar values, and
+        ``output="labels"`` is refused. The ML-only arguments and options (``heuristic``,
+        ``relaxation`` ...) are refused with it, and the other way round.
+    heuristic : str, optional
+        ``"ml"`` only: how the per-view LCPDFs are combined (default ``"h2-product"``):
 
         ============ ============================================== ========== =======
         name         rule                                           thesis     paper
@@ -93,8 +104,9 @@ def synthesize(
         ============ ============================================== ========== =======
 
         Thesis and paper tags are accepted as aliases (case-insensitive).
-    neighborhood : int
+    neighborhood : int, optional
         Odd side of the full-square window in each view (3 to 31; thesis 7, 9 or 11).
+        Default: 9 for ``"ml"`` (the thesis case), 7 for ``"wl"`` (``ch5_np_common``).
     scales : int
         Number of decimation scales (each halves the exemplar and the block).
     views : {2, 3}
@@ -184,14 +196,20 @@ def synthesize(
         raise InputError(f"method={method!r} is not available{planned}; use one of {METHODS}")
     if output not in OUTPUTS:
         raise InputError(f"output={output!r} must be one of {', '.join(map(repr, OUTPUTS))}")
-    unknown = set(options) - set(_ML_OPTIONS) - set(_BACKEND_OPTIONS) - {"builtin_size"}
+    valid = (_ML_OPTIONS + _BACKEND_OPTIONS if method == "ml" else _SEARCH_OPTIONS) + ("builtin_size",)
+    unknown = set(options) - set(valid)
     if unknown:
-        raise InputError(
-            f"unknown option(s) {sorted(unknown)}; valid: {', '.join(_ML_OPTIONS + _BACKEND_OPTIONS)}, builtin_size"
-        )
+        raise InputError(f"unknown option(s) {sorted(unknown)} for method={method!r}; valid: {', '.join(valid)}")
+    if neighborhood is None:
+        neighborhood = DEFAULT_NEIGHBORHOOD[method]
     shape = check_shape(shape)
+    if method == "wl":
+        if heuristic is not None:
+            raise InputError(f"heuristic={heuristic!r} is for method='ml' (wl averages the views' matches)")
+        return _synthesize_search(exemplar, shape, method, neighborhood, scales, views, levels, rng, device,
+                                  progress, output, full_output, options)
     params = MLParams(neighborhood=neighborhood, scales=scales, views=views, levels=levels,
-                      heuristic=heuristic, **{k: options[k] for k in _ML_OPTIONS if k in options})
+                      heuristic="h2-product" if heuristic is None else heuristic, **{k: options[k] for k in _ML_OPTIONS if k in options})
     image = load_exemplar(exemplar, builtin_size=options.get("builtin_size", 64))
     levels_of = level_map(image, levels)
     seed = resolve_seed(rng)
@@ -206,3 +224,37 @@ def synthesize(
                            exemplar=levels_of.to_values(levels_of.labels), exemplar_labels=levels_of.labels,
                            level_values=levels_of.values, values_exact=levels_of.exact,
                            seed=seed, params=effective, device=backend.name, timings=timings)
+
+
+def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, levels, rng, device, progress,
+                       output, full_output, options):
+    """:func:`synthesize` for the fixed-neighbourhood search methods (so far ``"wl"``)."""
+    from .exemplar import level_map, load_exemplar
+    from .search.match import CLMatcher, ReferenceMatcher
+    from .search.params import SearchParams
+    from .search.wl import run_wl
+
+    if output != "values":
+        raise InputError(f"method={method!r} averages exemplar values, so it has no level indices: "
+                         "use output='values'")
+    params = SearchParams(method=method, neighborhood=neighborhood, scales=scales, views=views,
+                          **{k: options[k] for k in _SEARCH_OPTIONS if k in options})
+    image = load_exemplar(exemplar, builtin_size=options.get("builtin_size", 64))
+    levels_of = level_map(image, levels)
+    grey = levels_of.to_values(levels_of.labels).astype(np.float64)
+    seed = resolve_seed(rng)
+    if isinstance(device, str) and device.lower() == "reference":
+        name, make_matcher = "reference (NumPy float64)", ReferenceMatcher
+    else:
+        from .core.device import select_device
+
+        dev = select_device(device)
+        name, make_matcher = dev.name, (lambda table: CLMatcher(dev, table))
+    log.info("synthesising %s from a %s exemplar with %s on %s, seed %d", shape, image.shape, method, name, seed)
+    vol, timings = run_wl(grey, shape, params, seed, make_matcher, progress)
+    if not full_output:
+        return vol
+    effective = {**params.to_dict(), "levels": levels, "shape": list(shape)}
+    return SynthesisResult(volume=vol, labels=None, exemplar=grey, exemplar_labels=levels_of.labels,
+                           level_values=levels_of.values, values_exact=levels_of.exact, seed=seed,
+                           params=effective, device=name, timings=timings)

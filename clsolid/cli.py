@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import platform
 import sys
 import time
 from pathlib import Path
 
+from .core.views import DEPTH_AXIS, VIEW_SETS
 from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
 from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, RELAXATIONS, SLICE_LAYOUTS,
                      UPSAMPLING, MLParams)
@@ -20,6 +22,10 @@ from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMID
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
 _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
             (DeviceMemoryError, EXIT_MEMORY), (KernelBuildError, EXIT_BUILD))
+
+
+#: The synth subcommand's defaults, filled in when its parser is built (for _check_method_flags).
+SYNTH_DEFAULTS: dict = {}
 
 
 def _levels(text: str) -> int | None:
@@ -39,11 +45,22 @@ def _add_synth(sub) -> None:
     p.add_argument("-o", "--output", required=True, type=Path, help="volume to write: .tif (ImageJ, ZYX) or .npy")
     p.add_argument("--shape", nargs=3, type=int, default=(64, 64, 64), metavar=("Z", "Y", "X"),
                    help="volume size (default 64 64 64)")
-    p.add_argument("--method", default="ml", help="synthesis method (only 'ml' so far)")
+    p.add_argument("--method", default="ml", choices=("ml", "wl"),
+                   help="ml: NP-MRF maximum likelihood (default); wl: Wei-Levoy search and average "
+                        "(options --iterations, --inner, --no-parent, --init)")
     d = MLParams()  # one source for the defaults; argparse shows them with %(default)s
     p.add_argument("--heuristic", default=d.heuristic,
                    help=f"view combination: {', '.join(HEURISTICS)} or a thesis/paper tag (default %(default)s)")
-    p.add_argument("--neighborhood", type=int, default=d.neighborhood, help="odd window size per view (default %(default)s)")
+    p.add_argument("--neighborhood", type=int, default=None,
+                   help=f"odd window size per view (default {d.neighborhood} for ml, 7 for wl)")
+    p.add_argument("--iterations", type=int, default=10, help="wl: passes per scale (default %(default)s)")
+    p.add_argument("--inner", type=int, default=4,
+                   help="wl: most searches per voxel and pass, the centre included after the first "
+                        "(default %(default)s)")
+    p.add_argument("--no-parent", action="store_true",
+                   help="wl: match the k x k square alone, without the coarser scale's 3 x 3")
+    p.add_argument("--init", choices=("upsample", "noise"), default="upsample",
+                   help="wl: a finer scale starts from the coarser result up-sampled (default) or from noise")
     p.add_argument("--scales", type=int, default=d.scales, help="decimation scales (default %(default)s)")
     p.add_argument("--pyramid", choices=PYRAMIDS, default=d.pyramid,
                    help="coarser exemplars: [1 2 1]/4 low-pass then 2:1 decimation, or plain decimation "
@@ -98,6 +115,7 @@ def _add_synth(sub) -> None:
                    help="JSON recording the evaluation indicators after every sweep (convergence curves)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
+    SYNTH_DEFAULTS.update({a.dest: a.default for a in p._actions})
 
 
 def _add_devices(sub) -> None:
@@ -130,8 +148,9 @@ def _fmt_time(s: float) -> str:
 def render_progress(info) -> None:
     """One stderr line per sweep: scale, sweep, global temperature, elapsed, ETA."""
     z, y, x = info.shape
+    temp = "" if math.isnan(info.temperature) else f"T={info.temperature:.0f} (stop at {info.target:.0f})  "
     print(f"scale {info.scale}/{info.n_scales} ({z}x{y}x{x})  sweep {info.sweep:>2}  "
-          f"T={info.temperature:.0f} (stop at {info.target:.0f})  visited {info.visited}  "
+          f"{temp}visited {info.visited}  "
           f"elapsed {_fmt_time(info.elapsed)}  ETA {_fmt_time(info.eta)}", file=sys.stderr, flush=True)
 
 
@@ -163,6 +182,37 @@ def _tracker(levels: int, records: list):
     return track
 
 
+#: Flags that only one method reads: given to the other, they are an error, not ignored.
+_ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited",
+            "insert_slices", "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor",
+            "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "indices", "track")
+_WL_ONLY = ("iterations", "inner", "no_parent", "init")
+
+
+def _check_method_flags(args) -> None:
+    """Refuse a flag the chosen method would not read (set away from its default)."""
+    other = _WL_ONLY if args.method == "ml" else _ML_ONLY
+    given = [name for name in other if getattr(args, name) != SYNTH_DEFAULTS[name]]
+    if given:
+        flags = ", ".join("--" + name.replace("_", "-") for name in given)
+        raise InputError(f"{flags} not used by --method {args.method}")
+
+
+def _ml_options(args) -> dict:
+    """The ``synthesize`` options of ``--method ml`` from the command line."""
+    options = dict(pyramid=args.pyramid, xi=args.xi, stop_fraction=args.stop_fraction, max_sweeps=args.max_sweeps,
+                   upsampling=args.upsampling, inherited=args.inherited, insert_slices=args.insert_slices,
+                   slice_layout=args.slice_layout,
+                   initial_temperature=args.initial_temperature, builtin_size=args.builtin_size,
+                   relaxation=args.relaxation, anneal_start=args.anneal_start, anneal_cooling=args.anneal_cooling,
+                   sweeps=args.sweeps, balance=args.balance)
+    for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale
+        values = getattr(args, name)
+        if values is not None:
+            options[name] = values[0] if len(values) == 1 else tuple(values)
+    return options
+
+
 def cmd_synth(args) -> int:
     from .api import synthesize
     from .preview import save_preview
@@ -179,21 +229,18 @@ def cmd_synth(args) -> int:
         if len(args.voxel_size) not in (1, 3):
             raise InputError(f"--voxel-size takes one value or three (Z Y X), not {len(args.voxel_size)}")
         voxel_size = args.voxel_size[0] if len(args.voxel_size) == 1 else tuple(args.voxel_size)
-    options = dict(pyramid=args.pyramid, xi=args.xi, stop_fraction=args.stop_fraction, max_sweeps=args.max_sweeps,
-                   upsampling=args.upsampling, inherited=args.inherited, insert_slices=args.insert_slices,
-                   slice_layout=args.slice_layout,
-                   initial_temperature=args.initial_temperature, builtin_size=args.builtin_size,
-                   relaxation=args.relaxation, anneal_start=args.anneal_start, anneal_cooling=args.anneal_cooling,
-                   sweeps=args.sweeps, balance=args.balance)
-    for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale
-        values = getattr(args, name)
-        if values is not None:
-            options[name] = values[0] if len(values) == 1 else tuple(values)
+    _check_method_flags(args)
+    if args.method == "wl":
+        options = dict(iterations=args.iterations, inner=args.inner, parent=not args.no_parent,
+                       init=args.init, builtin_size=args.builtin_size)
+    else:
+        options = _ml_options(args)
     hooks = [] if args.quiet else [render_progress]
     records: list = []
     if args.track is not None:
         hooks.append(_tracker(256 if args.levels is None else args.levels, records))
-    result = synthesize(args.exemplar, tuple(args.shape), method=args.method, heuristic=args.heuristic,
+    heuristic = args.heuristic if args.method == "ml" else None
+    result = synthesize(args.exemplar, tuple(args.shape), method=args.method, heuristic=heuristic,
                         neighborhood=args.neighborhood, scales=args.scales, views=args.views,
                         levels=args.levels, rng=args.seed, device=args.device,
                         progress=(lambda info: [h(info) for h in hooks]) if hooks else None,
@@ -212,9 +259,12 @@ def cmd_synth(args) -> int:
             "command": " ".join(sys.argv), "written_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
     sidecar.write_text(json.dumps(meta, indent=2, default=float))
     if args.preview is not None:
-        params = MLParams.from_dict(result.params)
-        save_preview(args.preview, result.exemplar, result.volume, constrained=params.view_names,
-                     depths=preview_depths(result.volume.shape, params))
+        if args.method == "ml":
+            params = MLParams.from_dict(result.params)
+            views, depths = params.view_names, preview_depths(result.volume.shape, params)
+        else:  # no +in slices to avoid: the middle of each axis
+            views, depths = VIEW_SETS[args.views], {v: result.volume.shape[a] // 2 for v, a in DEPTH_AXIS.items()}
+        save_preview(args.preview, result.exemplar, result.volume, constrained=views, depths=depths)
     if args.track is not None:
         args.track.parent.mkdir(parents=True, exist_ok=True)
         args.track.write_text(json.dumps({"exemplar": str(args.exemplar), "seed": result.seed,

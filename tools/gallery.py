@@ -32,7 +32,8 @@ from clsolid import metrics
 from clsolid.gallery import SIZES, gallery_exemplar, gallery_info, gallery_names
 from clsolid.metrics._common import jsonable
 from clsolid.metrics.symmetry import AXIS_PAIRS
-from clsolid.ml.params import VIEW_SETS, MLParams
+from clsolid.core.views import DEPTH_AXIS, VIEW_SETS
+from clsolid.ml.params import MLParams
 from clsolid.preview import render_preview
 from clsolid.ml.driver import inserted_depths, preview_depths
 from quality_ml import parse_setting  # beside this script (tools/ is on the path when it runs)
@@ -58,8 +59,15 @@ PANEL_MIN = 128
 
 
 def level_indices(res: Any) -> tuple[np.ndarray, np.ndarray]:
-    """The volume and the exemplar of a result, both in level indices (phases, for categorical ones)."""
-    return res.labels, res.exemplar_labels
+    """The volume and the exemplar of a result, both in level indices (phases, for categorical ones).
+
+    A method that blends values (``wl``) has no indices: each voxel counts for its nearest
+    level value, so a blend of two phases counts for one of them (or for a phase between).
+    """
+    if res.labels is not None:
+        return res.labels, res.exemplar_labels
+    mids = (res.level_values[1:] + res.level_values[:-1]) / 2.0
+    return np.searchsorted(mids, res.volume).astype(res.exemplar_labels.dtype), res.exemplar_labels
 
 
 def copy_chance(exemplar: np.ndarray, side: int) -> float:
@@ -74,6 +82,8 @@ def copy_chance(exemplar: np.ndarray, side: int) -> float:
 
 def inserted(res: Any) -> dict[str, np.ndarray]:
     """Depths of the ``+in`` slices of every view of a result (none for an unconstrained view)."""
+    if res.params["method"] != "ml":  # only the likelihood method inserts exemplar slices
+        return {view: np.zeros(0, int) for view in VIEWS}
     depths = inserted_depths(res.labels.shape, MLParams.from_dict(res.params))
     return {view: depths.get(view, np.zeros(0, int)) for view in VIEWS}
 
@@ -210,9 +220,14 @@ def montage(path: Path, rows: list[np.ndarray]) -> None:
 
 def montage_row(name: str, res: Any) -> np.ndarray:
     """The exemplar beside a front, right and top slice, each away from the ``+in`` slices."""
-    params = MLParams.from_dict(res.params)
-    return render_preview(res.exemplar_labels, res.labels, depths=preview_depths(res.labels.shape, params),
-                          constrained=params.view_names, name=name, min_side=PANEL_MIN).image
+    if res.params["method"] == "ml":
+        params = MLParams.from_dict(res.params)
+        return render_preview(res.exemplar_labels, res.labels, depths=preview_depths(res.labels.shape, params),
+                              constrained=params.view_names, name=name, min_side=PANEL_MIN).image
+    # a search method: no +in slices to avoid, so the middle of each axis, in values
+    depths = {v: res.volume.shape[a] // 2 for v, a in DEPTH_AXIS.items()}
+    return render_preview(res.exemplar, res.volume, depths=depths, constrained=VIEW_SETS[res.params["views"]],
+                          name=name, min_side=PANEL_MIN).image
 
 
 # ----------------------------------------------------------------------------- main

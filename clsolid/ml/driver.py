@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import logging
 import math
-import numbers
 import time
-from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
@@ -17,105 +15,9 @@ from .model import ScaleModel, build_scale, check_exemplar_fits, nearest_label
 from .params import DEPTH_AXIS, MLParams
 from ..core.philox import relax_tag
 from ..core.schedule import set_order, split_by_colour
+from ..core.synthesis import SweepInfo, SynthesisResult, check_shape, resolve_seed  # noqa: F401 (re-exported)
 
 log = logging.getLogger(__name__)
-
-
-@dataclass
-class SweepInfo:
-    """What a ``progress`` callback receives after every sweep.
-
-    ``scale`` counts from 1 (coarsest) to ``n_scales`` (full resolution); ``temperature``
-    is the global temperature after the sweep (the sum of voxel temperatures, or under
-    ``relaxation="annealing"`` the t_in of the next sweep) and ``target`` the value that
-    ends the scale (0 when a fixed number of ``sweeps`` does). ``eta`` is an estimate in seconds of
-    the time left for the whole synthesis. ``volume()`` returns a copy of the block
-    at the current scale, and ``exemplar`` is the quantised exemplar decimated to that
-    scale, so the two can be compared during the run.
-    """
-
-    scale: int
-    n_scales: int
-    shape: tuple[int, int, int]
-    sweep: int
-    max_sweeps: int
-    temperature: float
-    initial_temperature: float
-    target: float
-    visited: int
-    elapsed: float
-    eta: float
-    exemplar: np.ndarray = field(repr=False)
-    volume: Callable[[], np.ndarray] = field(repr=False)
-
-
-@dataclass
-class SynthesisResult:
-    """A synthesised volume with everything needed to reproduce and judge it.
-
-    Attributes
-    ----------
-    volume : ndarray
-        ``(Z, Y, X)`` in the exemplar's own units and dtype: the exemplar's own values
-        when it holds at most ``levels`` of them, else each level's mean value
-        (see :func:`clsolid.exemplar.level_map`).
-    labels : ndarray
-        The same volume as level indices in ``[0, level_values.size)`` (uint8, or uint16
-        above 256 levels): what the engine works on.
-    exemplar : ndarray
-        The exemplar as the engine saw it, in its own units (each pixel replaced by its
-        level's value; identical to the input when ``values_exact``).
-    exemplar_labels : ndarray
-        The same exemplar as level indices.
-    level_values : ndarray
-        Value of each level index: ``level_values[labels] == volume``.
-    values_exact : bool
-        Whether ``level_values`` are exactly values of the exemplar (False: level means).
-    seed : int
-        The seed actually used; passing it as ``rng`` reproduces the volume on the same device.
-    params : dict
-        Every effective parameter, including the per-scale bandwidths.
-    device : str
-        The back end that ran the synthesis.
-    timings : dict
-        ``total_s`` and, per scale (coarsest first), the shape, sweeps, global
-        temperatures and seconds per sweep.
-    """
-
-    volume: np.ndarray
-    labels: np.ndarray
-    exemplar: np.ndarray
-    exemplar_labels: np.ndarray
-    level_values: np.ndarray
-    values_exact: bool
-    seed: int
-    params: dict
-    device: str
-    timings: dict
-
-
-def resolve_seed(rng) -> int:
-    """SPEC 7: an int seed, a ``numpy.random.Generator``, or None (fresh entropy)."""
-    if rng is None:
-        return int(np.random.SeedSequence().generate_state(1, np.uint64)[0] >> np.uint64(1))
-    if isinstance(rng, np.random.Generator):
-        return int(rng.integers(0, 2**63 - 1))
-    if isinstance(rng, numbers.Integral) and not isinstance(rng, bool) and 0 <= rng < 2**64:
-        return int(rng)
-    raise InputError(f"rng={rng!r} must be a non-negative int seed, a numpy Generator or None")
-
-
-def check_shape(shape) -> tuple[int, int, int]:
-    try:
-        out = tuple(int(s) for s in shape)
-        ok = len(out) == 3 and all(float(s) == o for s, o in zip(shape, out))
-    except (TypeError, ValueError):
-        ok = False
-    if not ok:
-        raise InputError(f"shape={shape!r} must be three integers (Z, Y, X)")
-    if min(out) < 1:
-        raise InputError(f"shape={out} must have every size >= 1")
-    return out
 
 
 def slice_depths(size: int, count: int, step: int, offset: float = 0.0) -> np.ndarray:

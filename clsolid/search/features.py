@@ -42,7 +42,7 @@ def exemplar_features(fine: np.ndarray, coarse: np.ndarray | None, k: int) -> tu
         r, c = r[ok], c[ok]
     if r.size == 0:
         raise InputError(f"a {fine.shape[0]}x{fine.shape[1]} pyramid level has no complete {k}x{k} "
-                         "neighbourhood: use fewer levels or a smaller neighborhood")
+                         "neighbourhood: use fewer scales or a smaller neighborhood")
     off = square_offsets(k)
     parts = [fine[r[:, None] + off[:, 0], c[:, None] + off[:, 1]]]
     if coarse is not None:

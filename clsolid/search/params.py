@@ -11,6 +11,9 @@ from .match import check_side
 
 #: The search methods implemented so far (issue 11 adds "kopf" and "chen-wang").
 METHODS = ("wl",)
+#: How a finer level starts (thesis_spec §1.3, ambiguous there): the coarser result
+#: up-sampled (Kopf), or fresh noise tied to the coarser level only by the parent square.
+INITS = ("upsample", "noise")
 
 
 def _int_in(name: str, value, lo: int, hi: int) -> int:
@@ -31,8 +34,9 @@ class SearchParams:
         stop changing.
     neighborhood : int
         Side of the full square (odd; the thesis uses 5-11; default 7, ``ch5_np_common``).
-    levels : int
-        Gaussian pyramid levels of exemplar and volume (default 3).
+    scales : int
+        Gaussian pyramid levels of exemplar and volume (default 3; ``scales`` as for the
+        likelihood method).
     iterations : int
         Passes over every voxel at each level (default 10).
     views : {2, 3}
@@ -43,25 +47,34 @@ class SearchParams:
     parent : bool
         Multi-resolution neighbourhood: the k x k square plus the 3 x 3 square of the
         coarser level (Wei & Levoy; thesis_spec §1.3). Ignored at the coarsest level.
+    init : {"upsample", "noise"}
+        How a finer level starts: the coarser result, each voxel copied to its 2x2x2 block
+        (default), or noise drawn from that level's exemplar pixels (Wei & Levoy's reading;
+        from noise, every full-square neighbourhood is nearest to the flat patches of the
+        majority phase, and a binary exemplar collapses to it). The coarsest level always
+        starts from noise.
     """
 
     method: str = "wl"
     neighborhood: int = 7
-    levels: int = 3
+    scales: int = 3
     iterations: int = 10
     views: int = 2
     inner: int = 4
     parent: bool = True
+    init: str = "upsample"
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
             raise InputError(f"method={self.method!r} must be one of {', '.join(map(repr, METHODS))}")
         check_side(self.neighborhood)
-        _int_in("levels", self.levels, 1, 8)
+        _int_in("scales", self.scales, 1, 8)
         _int_in("iterations", self.iterations, 1, 1000)
         _int_in("inner", self.inner, 1, 100)
         if self.views not in VIEW_SETS:
             raise InputError(f"views={self.views!r} must be 2 (front + right) or 3 (front + right + top)")
+        if self.init not in INITS:
+            raise InputError(f"init={self.init!r} must be one of {', '.join(map(repr, INITS))}")
         if not isinstance(self.parent, bool):
             raise InputError(f"parent={self.parent!r} must be True or False")
 
