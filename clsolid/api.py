@@ -13,14 +13,14 @@ from .ml.driver import SweepInfo, SynthesisResult, check_shape, resolve_seed, ru
 
 log = logging.getLogger(__name__)
 
-METHODS = ("ml", "wl")
+METHODS = ("ml", "wl", "kopf")
 #: What :func:`synthesize` returns: the exemplar's own values, or the engine's level indices.
 OUTPUTS = ("values", "labels")
-PLANNED_METHODS = ("kopf", "chen-wang")
+PLANNED_METHODS = ("chen-wang",)
 #: Options of the search methods (clsolid.search.params.SearchParams).
 _SEARCH_OPTIONS = ("iterations", "inner", "parent", "init")
 #: The neighbourhood side each method uses when none is given (ML: the thesis case; WL: ch5_np_common).
-DEFAULT_NEIGHBORHOOD = {"ml": 9, "wl": 7}
+DEFAULT_NEIGHBORHOOD = {"ml": 9, "wl": 7, "kopf": 7}
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance")
@@ -80,13 +80,15 @@ def synthesize(
         textures, top-left 256x256 area-averaged to 64x64; option ``builtin_size``).
     shape : tuple of 3 ints
         ``(Z, Y, X)`` size of the block. Output is toroidal (tileable); any sizes work.
-    method : {"ml", "wl"}
+    method : {"ml", "wl", "kopf"}
         ``"ml"``: the maximum-likelihood method (default). ``"wl"``: Wei-Levoy extended
         to 2D->3D (thesis_spec §1.6.1): every view's exact best match, averaged, over a
-        Gaussian pyramid; its options are ``iterations`` (passes per scale, default 10),
+        Gaussian pyramid. ``"kopf"``: the same matches combined with Kopf et al.'s robust
+        weights and grey-level histogram re-weighting (§1.6.2; a phase, never a blend, on
+        an exemplar of at most 8 values). Their options are ``iterations`` (passes per scale, default 10),
         ``inner`` (most searches per voxel and pass, default 4), ``parent`` (the coarser
         scale's 3x3 in every neighbourhood, default True) and ``init`` (``"upsample"``,
-        default, or ``"noise"``); it returns float64 means of exemplar values, and
+        default, or ``"noise"``); they return float64 volumes of exemplar values or their means, and
         ``output="labels"`` is refused. The ML-only arguments and options (``heuristic``,
         ``relaxation`` ...) are refused with it, and the other way round.
     heuristic : str, optional
@@ -203,9 +205,9 @@ def synthesize(
     if neighborhood is None:
         neighborhood = DEFAULT_NEIGHBORHOOD[method]
     shape = check_shape(shape)
-    if method == "wl":
+    if method != "ml":
         if heuristic is not None:
-            raise InputError(f"heuristic={heuristic!r} is for method='ml' (wl averages the views' matches)")
+            raise InputError(f"heuristic={heuristic!r} is for method='ml' ({method} combines the views' matches)")
         return _synthesize_search(exemplar, shape, method, neighborhood, scales, views, levels, rng, device,
                                   progress, output, full_output, options)
     params = MLParams(neighborhood=neighborhood, scales=scales, views=views, levels=levels,
@@ -228,14 +230,14 @@ def synthesize(
 
 def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, levels, rng, device, progress,
                        output, full_output, options):
-    """:func:`synthesize` for the fixed-neighbourhood search methods (so far ``"wl"``)."""
+    """:func:`synthesize` for the fixed-neighbourhood search methods (``"wl"``, ``"kopf"``)."""
     from .exemplar import level_map, load_exemplar
     from .search.match import CLMatcher, ReferenceMatcher
     from .search.params import SearchParams
-    from .search.wl import run_wl
+    from .search.driver import run_search
 
     if output != "values":
-        raise InputError(f"method={method!r} averages exemplar values, so it has no level indices: "
+        raise InputError(f"method={method!r} combines exemplar values, so it has no level indices: "
                          "use output='values'")
     params = SearchParams(method=method, neighborhood=neighborhood, scales=scales, views=views,
                           **{k: options[k] for k in _SEARCH_OPTIONS if k in options})
@@ -251,7 +253,7 @@ def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, lev
         dev = select_device(device)
         name, make_matcher = dev.name, (lambda table: CLMatcher(dev, table))
     log.info("synthesising %s from a %s exemplar with %s on %s, seed %d", shape, image.shape, method, name, seed)
-    vol, timings = run_wl(grey, shape, params, seed, make_matcher, progress)
+    vol, timings = run_search(grey, shape, params, seed, make_matcher, progress)
     if not full_output:
         return vol
     effective = {**params.to_dict(), "levels": levels, "shape": list(shape)}

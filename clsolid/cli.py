@@ -45,8 +45,9 @@ def _add_synth(sub) -> None:
     p.add_argument("-o", "--output", required=True, type=Path, help="volume to write: .tif (ImageJ, ZYX) or .npy")
     p.add_argument("--shape", nargs=3, type=int, default=(64, 64, 64), metavar=("Z", "Y", "X"),
                    help="volume size (default 64 64 64)")
-    p.add_argument("--method", default="ml", choices=("ml", "wl"),
-                   help="ml: NP-MRF maximum likelihood (default); wl: Wei-Levoy search and average "
+    p.add_argument("--method", default="ml", choices=("ml", "wl", "kopf"),
+                   help="ml: NP-MRF maximum likelihood (default); wl: Wei-Levoy search and average; "
+                        "kopf: Kopf et al. weights and histogram re-weighting "
                         "(options --iterations, --inner, --no-parent, --init)")
     d = MLParams()  # one source for the defaults; argparse shows them with %(default)s
     p.add_argument("--heuristic", default=d.heuristic,
@@ -230,7 +231,7 @@ def cmd_synth(args) -> int:
             raise InputError(f"--voxel-size takes one value or three (Z Y X), not {len(args.voxel_size)}")
         voxel_size = args.voxel_size[0] if len(args.voxel_size) == 1 else tuple(args.voxel_size)
     _check_method_flags(args)
-    if args.method == "wl":
+    if args.method != "ml":
         options = dict(iterations=args.iterations, inner=args.inner, parent=not args.no_parent,
                        init=args.init, builtin_size=args.builtin_size)
     else:

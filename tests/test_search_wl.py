@@ -12,7 +12,7 @@ from clsolid.search.features import centre_weights, exemplar_features, voxel_fea
 from clsolid.search.match import CLMatcher, ReferenceMatcher
 from clsolid.search.params import SearchParams
 from clsolid.search.pyramid import gaussian_pyramid
-from clsolid.search.wl import level_shapes, run_wl
+from clsolid.search.driver import level_shapes, run_search as run_wl
 
 
 def _exemplar(size=24, seed=0):

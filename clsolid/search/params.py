@@ -10,7 +10,7 @@ from ..errors import InputError
 from .match import check_side
 
 #: The search methods implemented so far (issue 11 adds "kopf" and "chen-wang").
-METHODS = ("wl",)
+METHODS = ("wl", "kopf")
 #: How a finer level starts (thesis_spec §1.3, ambiguous there): the coarser result
 #: up-sampled (Kopf), or fresh noise tied to the coarser level only by the parent square.
 INITS = ("upsample", "noise")
@@ -28,10 +28,11 @@ class SearchParams:
 
     Attributes
     ----------
-    method : {"wl"}
+    method : {"wl", "kopf"}
         ``"wl"``: Wei-Levoy extended to 2D->3D (thesis_spec §1.6.1): each view's best
         match, averaged; repeated per voxel with the centre included until the matches
-        stop changing.
+        stop changing. ``"kopf"``: each view's best match weighted by Kopf's robust
+        weight and the grey-level histogram re-weighting (§1.6.2; ``clsolid.search.kopf``).
     neighborhood : int
         Side of the full square (odd; the thesis uses 5-11; default 7, ``ch5_np_common``).
     scales : int
@@ -43,7 +44,7 @@ class SearchParams:
         Constrained views: front + right, or all three.
     inner : int
         Most searches per voxel and pass for ``wl``'s inner repetition (the thesis: "about
-        four"); 1 = a single search.
+        four"); 1 = a single search. ``kopf`` searches once.
     parent : bool
         Multi-resolution neighbourhood: the k x k square plus the 3 x 3 square of the
         coarser level (Wei & Levoy; thesis_spec §1.3). Ignored at the coarsest level.

@@ -1,131 +1,41 @@
-"""Wei-Levoy extended to 2D->3D (NP_WL, thesis_spec §1.6.1), coarse to fine.
+"""NP_WL's rule (thesis_spec §1.6.1): each view's best match, averaged, re-searched.
 
-The coarsest level starts as noise drawn from its exemplar's pixels; each finer level
-starts from the coarser result up-sampled (or, with ``init="noise"``, from fresh noise,
-Wei & Levoy's reading, thesis_spec §1.3 (a)), and the coarser result also enters every
-neighbourhood as its parent square. One pass
-visits every voxel once, conflict-free set by conflict-free set in a seeded order, so a
-pass equals a sequential one in that order. At a voxel, each constrained view's
-neighbourhood (centre left out) is matched exactly against every exemplar site; the voxel
-takes the mean of the matched centre values; then, up to ``inner - 1`` more times, the
-search is repeated with the centre term included, until every view's match is unchanged.
+At a voxel, each constrained view's neighbourhood (centre left out) is matched exactly
+against every exemplar site; the voxel takes the mean of the matched centre values; then,
+up to ``inner - 1`` more times, the search is repeated with the centre term included,
+until every view's match is unchanged.
 """
 
 from __future__ import annotations
 
-import math
-import time
-from typing import Any, Callable
-
 import numpy as np
 
-from ..core.schedule import colour_sets, set_order, split_by_colour
-from ..core.synthesis import SweepInfo
-from ..errors import InputError
-from .features import centre_weights, exemplar_features, voxel_features
-from .params import SearchParams
-from .pyramid import gaussian_pyramid
+from .features import voxel_features
+from .level import Level
 
 
-def level_shapes(shape: tuple[int, int, int], levels: int) -> list[tuple[int, int, int]]:
-    """Volume shape at each level, finest first (halved, rounded down, per level)."""
-    out = [tuple(int(n) for n in shape)]
-    for _ in range(levels - 1):
-        out.append(tuple(max(1, n // 2) for n in out[-1]))
-    return out
+def matches(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray,
+            weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each view's best site and its weighted squared distance, ``(views, m)`` each."""
+    k = level.params.neighborhood
+    found = [level.matcher.best(voxel_features(vol, coarse, voxels, v, k), weights) for v in level.params.view_names]
+    return np.stack([f[0] for f in found]), np.stack([f[1] for f in found]).astype(np.float64)
 
 
-def run_wl(exemplar: np.ndarray, shape: tuple[int, int, int], params: SearchParams, seed: int,
-           make_matcher: Callable[[np.ndarray], Any],
-           progress: Callable[[SweepInfo], None] | None = None) -> tuple[np.ndarray, dict]:
-    """Grow a ``shape`` block from a 2D *exemplar* (float grey levels) with NP_WL.
-
-    *make_matcher(table)* returns an object with ``best(queries, weights)`` (a
-    :class:`~clsolid.search.match.CLMatcher` or :class:`~clsolid.search.match.ReferenceMatcher`).
-    *progress* gets a :class:`~clsolid.core.synthesis.SweepInfo` after every pass (no
-    temperatures: those fields are NaN). Returns the float64 volume and timings.
-    """
-    k = params.neighborhood
-    shapes = level_shapes(shape, params.scales)
-    if min(shapes[-1]) < 2:
-        raise InputError(f"shape={tuple(shape)} is too small for {params.scales} levels")
-    pyr = gaussian_pyramid(exemplar, params.scales)
-    timings: dict = {"levels": []}
-    t0 = time.perf_counter()
-    coarse = None
-    for level in range(params.scales - 1, -1, -1):
-        t_level = time.perf_counter()
-        parent_img = pyr[level + 1] if params.parent and level + 1 < params.scales else None
-        table, centres = exemplar_features(pyr[level], parent_img, k)
-        use_parent = parent_img is not None
-        matcher = make_matcher(table)
-        w_first = centre_weights(k, use_parent, centre=False)
-        w_again = centre_weights(k, use_parent, centre=True)
-        vol = _start(pyr[level], shapes[level], coarse, params.init, seed, level)
-        colour, n_sets = colour_sets(shapes[level], k // 2)
-        sets = split_by_colour(np.ones(shapes[level], bool), colour, n_sets)
-        searches = 0
-        t_iter = time.perf_counter()
-        for it in range(1, params.iterations + 1):
-            for c in set_order(n_sets, seed, level, it):
-                searches += _update(vol, coarse if use_parent else None, sets[c], params, matcher,
-                                    centres, w_first, w_again)
-            if progress is not None:
-                now = time.perf_counter()
-                progress(_report(params, level, it, shapes[level], now - t_iter, now - t0, pyr[level], vol))
-            t_iter = time.perf_counter()
-        timings["levels"].append({"level": level, "shape": list(shapes[level]), "n_sites": int(table.shape[0]),
-                                  "searches": searches, "seconds": time.perf_counter() - t_level})
-        coarse = vol
-    timings["total_s"] = time.perf_counter() - t0
-    return coarse, timings
-
-
-def _start(exemplar: np.ndarray, shape: tuple[int, int, int], coarse: np.ndarray | None, init: str,
-           seed: int, level: int) -> np.ndarray:
-    """A level's starting block: the coarser result up-sampled 2x2x2 (wrapping where a side is
-    odd), or noise drawn from the level's exemplar pixels (always at the coarsest level)."""
-    if coarse is None or init == "noise":
-        return np.random.default_rng([seed, level]).choice(exemplar.ravel(), size=shape)
-    idx = np.ix_(*[(np.arange(n) // 2) % m for n, m in zip(shape, coarse.shape)])
-    return coarse[idx].astype(np.float64)
-
-
-def _update(vol: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray, params: SearchParams,
-            matcher: Any, centres: np.ndarray, w_first: np.ndarray, w_again: np.ndarray) -> int:
+def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray) -> int:
     """One conflict-free set: search, average, and the inner repetition. Returns the searches made."""
-    k, views = params.neighborhood, params.view_names
     flat = vol.reshape(-1)
-
-    def matches(vox: np.ndarray, weights: np.ndarray) -> np.ndarray:
-        return np.stack([matcher.best(voxel_features(vol, coarse, vox, v, k), weights)[0] for v in views])
-
-    sites = matches(voxels, w_first)  # (views, m)
-    flat[voxels] = centres[sites].mean(axis=0)
+    sites = matches(level, vol, coarse, voxels, level.w_first)[0]  # (views, m)
+    flat[voxels] = level.centres[sites].mean(axis=0)
     searches = sites.size
     todo = np.arange(voxels.size)
-    for _ in range(params.inner - 1):
-        again = matches(voxels[todo], w_again)
+    for _ in range(level.params.inner - 1):
+        again = matches(level, vol, coarse, voxels[todo], level.w_again)[0]
         searches += again.size
         moved = np.any(again != sites[:, todo], axis=0)
         if not moved.any():
             break
         todo = todo[moved]
         sites[:, todo] = again[:, moved]
-        flat[voxels[todo]] = centres[sites[:, todo]].mean(axis=0)
+        flat[voxels[todo]] = level.centres[sites[:, todo]].mean(axis=0)
     return searches
-
-
-#: Rough cost of a finer level against the one before it: 8x the voxels, about 4x the sites.
-_FINER_COST = 32.0
-
-
-def _report(params: SearchParams, level: int, it: int, shape: tuple[int, int, int], last_s: float,
-            elapsed: float, exemplar: np.ndarray, vol: np.ndarray) -> SweepInfo:
-    """The progress report after pass *it* of *level*, with a rough ETA from the last pass."""
-    left = (params.iterations - it) * last_s
-    left += sum(params.iterations * last_s * _FINER_COST**j for j in range(1, level + 1))
-    return SweepInfo(scale=params.scales - level, n_scales=params.scales, shape=tuple(shape), sweep=it,
-                     max_sweeps=params.iterations, temperature=math.nan, initial_temperature=math.nan,
-                     target=math.nan, visited=int(np.prod(shape)), elapsed=elapsed, eta=left,
-                     exemplar=exemplar, volume=lambda: vol.copy())
