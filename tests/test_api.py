@@ -90,7 +90,7 @@ def test_unknown_option_and_method():
     with pytest.raises(InputError, match="unknown option"):
         clsolid.synthesize(ex, (4, 4, 4), device="reference", temprature=3, **SMALL)
     with pytest.raises(InputError, match="planned"):
-        clsolid.synthesize(ex, (4, 4, 4), method="kopf", device="reference", **SMALL)
+        clsolid.synthesize(ex, (4, 4, 4), method="chen-wang", device="reference", **SMALL)
 
 
 def test_memory_is_checked_before_allocating(device, monkeypatch):
