@@ -121,7 +121,7 @@ def test_wl_grows_structure_from_noise(device):
 
 
 @pytest.mark.parametrize("kwargs, word", [
-    (dict(method="kopf"), "method"), (dict(neighborhood=6), "odd"), (dict(scales=0), "scales"),
+    (dict(method="chen-wang"), "method"), (dict(neighborhood=6), "odd"), (dict(scales=0), "scales"),
     (dict(iterations=0), "iterations"), (dict(views=4), "views"), (dict(inner=0), "inner"),
     (dict(parent=1), "parent"), (dict(init="zeros"), "init"),
 ])
