@@ -51,6 +51,7 @@ def test_gallery_writes_table_json_and_montage(capsys, device, tmp_path, tool):
 
 def test_bench_search_runs(capsys, device, tool):
     tool("bench_search").main(["--neighborhood", "3", "--queries", "64", "--reference-queries", "8",
-                                "--device", device.device.name.strip()[:8]])
+                                "--shape", "8", "--iterations", "1", "--device", device.device.name.strip()[:8]])
     out = capsys.readouterr().out
     assert "% of matmul" in out and "candidate distances/s" in out and "same site on 100.00% of 8" in out
+    assert "wl: brick" in out and "kopf: brick" in out and "end to end" in out
