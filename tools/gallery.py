@@ -66,7 +66,8 @@ def level_indices(res: Any) -> tuple[np.ndarray, np.ndarray]:
     """
     if res.labels is not None:
         return res.labels, res.exemplar_labels
-    mids = (res.level_values[1:] + res.level_values[:-1]) / 2.0
+    values = np.asarray(res.level_values, np.float64)  # the exemplar's dtype: uint8 sums would wrap
+    mids = (values[1:] + values[:-1]) / 2.0
     return np.searchsorted(mids, res.volume).astype(res.exemplar_labels.dtype), res.exemplar_labels
 
 
