@@ -27,9 +27,22 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch")
 
 
+def is_reference(device) -> bool:
+    """Whether *device* asks for the slow float64 NumPy back end."""
+    return isinstance(device, str) and device.lower() == "reference"
+
+
+def _load(exemplar, levels, rng, options: dict):
+    """The exemplar image, its level map and the seed, as every method takes them."""
+    from .exemplar import level_map, load_exemplar
+
+    image = load_exemplar(exemplar, builtin_size=options.get("builtin_size", 64))
+    return image, level_map(image, levels), resolve_seed(rng)
+
+
 def make_backend(device, backend_options: dict):
     """The reference back end for ``device="reference"``, else an OpenCL one."""
-    if isinstance(device, str) and device.lower() == "reference":
+    if is_reference(device):
         from .ml.reference import ReferenceBackend
 
         return ReferenceBackend()
@@ -191,8 +204,6 @@ def synthesize(
         No OpenCL device; buffers too large for the device (checked before allocating);
         a kernel failed to build.
     """
-    from .exemplar import level_map, load_exemplar
-
     if method not in METHODS:
         planned = f" ({', '.join(PLANNED_METHODS)} are planned, not implemented yet)" if method in PLANNED_METHODS else ""
         raise InputError(f"method={method!r} is not available{planned}; use one of {METHODS}")
@@ -212,9 +223,7 @@ def synthesize(
                                   progress, output, full_output, options)
     params = MLParams(neighborhood=neighborhood, scales=scales, views=views, levels=levels,
                       heuristic="h2-product" if heuristic is None else heuristic, **{k: options[k] for k in _ML_OPTIONS if k in options})
-    image = load_exemplar(exemplar, builtin_size=options.get("builtin_size", 64))
-    levels_of = level_map(image, levels)
-    seed = resolve_seed(rng)
+    image, levels_of, seed = _load(exemplar, levels, rng, options)
     backend = make_backend(device, {k: options[k] for k in _BACKEND_OPTIONS if k in options})
     log.info("synthesising %s from a %s exemplar on %s, seed %d", shape, image.shape, backend.name, seed)
     vol, timings, bandwidths = run_ml(levels_of.labels, shape, params, seed, backend, progress)
@@ -231,7 +240,6 @@ def synthesize(
 def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, levels, rng, device, progress,
                        output, full_output, options):
     """:func:`synthesize` for the fixed-neighbourhood search methods (``"wl"``, ``"kopf"``)."""
-    from .exemplar import level_map, load_exemplar
     from .search.match import CLMatcher, ReferenceMatcher
     from .search.params import SearchParams
     from .search.driver import run_search
@@ -241,11 +249,9 @@ def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, lev
                          "use output='values'")
     params = SearchParams(method=method, neighborhood=neighborhood, scales=scales, views=views,
                           **{k: options[k] for k in _SEARCH_OPTIONS if k in options})
-    image = load_exemplar(exemplar, builtin_size=options.get("builtin_size", 64))
-    levels_of = level_map(image, levels)
+    image, levels_of, seed = _load(exemplar, levels, rng, options)
     grey = levels_of.to_values(levels_of.labels).astype(np.float64)
-    seed = resolve_seed(rng)
-    if isinstance(device, str) and device.lower() == "reference":
+    if is_reference(device):
         name, make_matcher = "reference (NumPy float64)", ReferenceMatcher
     else:
         from .core.device import select_device

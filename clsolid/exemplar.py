@@ -306,6 +306,14 @@ class LevelMap:
         return self.values[labels]
 
 
+def nearest_level_index(values: Any, levels: np.ndarray) -> np.ndarray:
+    """Index in the sorted *levels* of the level nearest to each of *values* (flattened; the
+    lower level on a tie). Values between levels, as averaging methods and ``h1-mean`` write,
+    count for the nearest; the midpoints are taken in float64, so integer levels do not wrap."""
+    lv = np.asarray(levels, np.float64)
+    return np.searchsorted((lv[1:] + lv[:-1]) / 2.0, np.ravel(values))
+
+
 def _bin_means(image: np.ndarray, labels: np.ndarray, levels: int) -> np.ndarray:
     """Mean of the pixels of each level, in the image's dtype; an empty level gets its bin centre."""
     counts = np.bincount(labels.ravel(), minlength=levels)

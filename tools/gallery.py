@@ -29,6 +29,7 @@ from PIL import Image
 
 import clsolid
 from clsolid import metrics
+from clsolid.exemplar import nearest_level_index
 from clsolid.gallery import SIZES, gallery_exemplar, gallery_info, gallery_names
 from clsolid.metrics._common import jsonable
 from clsolid.metrics.symmetry import AXIS_PAIRS
@@ -66,9 +67,8 @@ def level_indices(res: Any) -> tuple[np.ndarray, np.ndarray]:
     """
     if res.labels is not None:
         return res.labels, res.exemplar_labels
-    values = np.asarray(res.level_values, np.float64)  # the exemplar's dtype: uint8 sums would wrap
-    mids = (values[1:] + values[:-1]) / 2.0
-    return np.searchsorted(mids, res.volume).astype(res.exemplar_labels.dtype), res.exemplar_labels
+    index = nearest_level_index(res.volume, res.level_values).reshape(res.volume.shape)
+    return index.astype(res.exemplar_labels.dtype), res.exemplar_labels
 
 
 def copy_chance(exemplar: np.ndarray, side: int) -> float:

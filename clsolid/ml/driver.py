@@ -11,7 +11,8 @@ import numpy as np
 
 from .balance import project_bias, score_stride, softmax, sweep_target
 from ..errors import InputError
-from .model import ScaleModel, build_scale, check_exemplar_fits, nearest_label
+from ..exemplar import nearest_level_index
+from .model import ScaleModel, build_scale, check_exemplar_fits
 from .params import DEPTH_AXIS, MLParams
 from ..core.philox import relax_tag
 from ..core.schedule import set_order, split_by_colour
@@ -124,12 +125,7 @@ def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, 
 def label_fractions(values: np.ndarray, labels: np.ndarray) -> np.ndarray:
     """Fraction of *values* on each of the sorted *labels* (a value off the labels, as
     ``h1-mean`` can write, counts for the nearest)."""
-    return np.bincount(label_index(values, labels), minlength=labels.size) / max(np.size(values), 1)
-
-
-def label_index(values: np.ndarray, labels: np.ndarray) -> np.ndarray:
-    """Index in the sorted *labels* of each of *values* (flattened; off-label values: the nearest)."""
-    return np.searchsorted(labels, nearest_label(np.ravel(values).astype(np.float64), labels))
+    return np.bincount(nearest_level_index(values, labels), minlength=labels.size) / max(np.size(values), 1)
 
 
 class Balance:
@@ -147,7 +143,7 @@ class Balance:
         self.pi = label_fractions(model.exemplar, model.labels)
         self.stride = score_stride(model.shape)
         self.bias = np.zeros(model.labels.size)  # a coarser scale's labels mean other grey levels: start afresh
-        self.index = label_index(volume, model.labels)  # each voxel's label, kept up to date
+        self.index = nearest_level_index(volume, model.labels)  # each voxel's label, kept up to date
 
     def after(self, backend: Any, updated: np.ndarray, pending: np.ndarray) -> np.ndarray:
         """The bias for the *pending* voxels, from the scores the *updated* ones left.
@@ -156,7 +152,7 @@ class Balance:
         fractions, given the labels of all the others.
         """
         labels = self.model.labels
-        self.index[updated] = label_index(np.asarray(backend.volume()).ravel()[updated], labels)
+        self.index[updated] = nearest_level_index(np.asarray(backend.volume()).ravel()[updated], labels)
         rows = updated[updated % self.stride == 0] // self.stride
         if rows.size == 0 or pending.size == 0:
             return self.bias

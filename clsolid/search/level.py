@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from ..exemplar import nearest_level_index
 from .params import SearchParams
 
 
@@ -17,7 +18,6 @@ class LevelHistogram:
 
     def __init__(self, finest: np.ndarray, exemplar: np.ndarray, volume: np.ndarray) -> None:
         self.values = np.unique(finest)
-        self.mids = (self.values[1:] + self.values[:-1]) / 2.0
         n = self.values.size
         self.exemplar = np.bincount(self.bin(exemplar), minlength=n) / exemplar.size
         self.counts = np.bincount(self.bin(volume), minlength=n).astype(np.int64)
@@ -25,7 +25,7 @@ class LevelHistogram:
 
     def bin(self, values: np.ndarray) -> np.ndarray:
         """The bin of each value (the nearest of the finest exemplar's values)."""
-        return np.searchsorted(self.mids, np.ravel(values))
+        return nearest_level_index(values, self.values)
 
     @property
     def volume(self) -> np.ndarray:
