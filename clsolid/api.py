@@ -22,6 +22,7 @@ _SEARCH_OPTIONS = ("iterations", "inner", "parent", "init")
 #: The neighbourhood side each method uses when none is given (ML: the thesis case; WL: ch5_np_common).
 DEFAULT_NEIGHBORHOOD = {"ml": 9, "wl": 7, "kopf": 7}
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
+               "insert_spacing",
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch")
@@ -81,9 +82,9 @@ def synthesize(
 
     The defaults depart from the published method where the gallery of exemplars
     (``tools/gallery.py``) showed it fails: Gibbs draws instead of ICM's argmax, a
-    label-histogram balance, and staggered ``+in`` slices. ``relaxation="icm",
-    balance=0, slice_layout="aligned"`` (with ``bandwidth_factor=1, pyramid="decimate"``)
-    is the thesis's form. See the README, Choices.
+    label-histogram balance, and dense, staggered ``+in`` slices. ``relaxation="icm",
+    balance=0, slice_layout="aligned", insert_slices=4`` (with ``bandwidth_factor=1,
+    pyramid="decimate"``) is the thesis's form. See the README, Choices.
 
     Parameters
     ----------
@@ -154,9 +155,11 @@ def synthesize(
         temperature has fallen by this fraction, or reaches 0), ``max_sweeps`` (30 per scale),
         ``upsampling`` (``"1/8"`` or ``"8/8"``; default 1/8, and 8/8 under annealing as in
         TIP14), ``inherited`` (``"resynthesize"`` with t held at 0, or ``"fixed"``),
-        ``insert_slices`` (exemplar slices tiled onto this many slices of each constrained
-        view at the start and trusted (t = 0), the thesis's ``+in``; default 4; 0 gives the
-        ``-in`` start, which collapses to the majority), ``slice_layout`` (``"staggered"``,
+        ``insert_spacing`` (the thesis's ``+in``: the exemplar is tiled onto one slice of
+        each constrained view about every this many voxels of its depth axis, on
+        multiples of 2^(scales-1), and trusted (t = 0) at the start of every scale;
+        default 6), ``insert_slices`` (a number of such slices per view instead; 0 gives
+        the ``-in`` start, which collapses to the majority), ``slice_layout`` (``"staggered"``,
         the default: each view's slices between the other's, each with its own seeded
         shift of the exemplar; ``"aligned"``: the same depths and tiling in every view, as
         the thesis, which makes the block nearly its own x<->z mirror image),

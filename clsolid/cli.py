@@ -18,6 +18,7 @@ from .core.views import DEPTH_AXIS, VIEW_SETS
 from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
 from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, RELAXATIONS, SLICE_LAYOUTS,
                      UPSAMPLING, MLParams)
+from .presets import PRESETS, Preset, get_preset
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
 _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
@@ -26,6 +27,8 @@ _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
 
 #: The synth subcommand's defaults, filled in when its parser is built (for _check_method_flags).
 SYNTH_DEFAULTS: dict = {}
+#: The synth subcommand's parser, kept so that a preset can become its defaults.
+_SYNTH_PARSER: list = []
 
 
 def _levels(text: str) -> int | None:
@@ -45,6 +48,8 @@ def _add_synth(sub) -> None:
     p.add_argument("-o", "--output", required=True, type=Path, help="volume to write: .tif (ImageJ, ZYX) or .npy")
     p.add_argument("--shape", nargs=3, type=int, default=(64, 64, 64), metavar=("Z", "Y", "X"),
                    help="volume size (default 64 64 64)")
+    p.add_argument("--preset", choices=tuple(PRESETS), default=None,
+                   help="a thesis experiment's settings (README, Presets); flags given explicitly override them")
     p.add_argument("--method", default="ml", choices=("ml", "wl", "kopf"),
                    help="ml: NP-MRF maximum likelihood (default); wl: Wei-Levoy search and average; "
                         "kopf: Kopf et al. weights and histogram re-weighting "
@@ -76,8 +81,11 @@ def _add_synth(sub) -> None:
                    help="coarse-to-fine copy (default 1/8; 8/8 under --relaxation annealing, as TIP14)")
     p.add_argument("--inherited", choices=INHERITED, default=d.inherited,
                    help="voxels from the coarser scale: re-synthesised with t=0, or fixed (default %(default)s)")
+    p.add_argument("--insert-spacing", type=float, default=d.insert_spacing,
+                   help="+in: an exemplar slice, trusted, about every this many voxels of each constrained "
+                        "view's depth (default %(default)s)")
     p.add_argument("--insert-slices", type=int, default=d.insert_slices,
-                   help="exemplar slices inserted per constrained view, trusted (+in; default %(default)s); 0 = noise only (-in)")
+                   help="+in: this many slices per constrained view instead of --insert-spacing; 0 = noise only (-in)")
     p.add_argument("--slice-layout", choices=SLICE_LAYOUTS, default=d.slice_layout,
                    help="+in slices at the same depths and tiling in every view, or staggered between "
                         "views with seeded shifts (default %(default)s)")
@@ -117,6 +125,32 @@ def _add_synth(sub) -> None:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     SYNTH_DEFAULTS.update({a.dest: a.default for a in p._actions})
+    _SYNTH_PARSER[:] = [p]
+
+
+def _preset_defaults(preset: Preset) -> dict:
+    """A preset as the synth subcommand's defaults (its option names are the flags' names)."""
+    values = {"method": preset.method, "shape": preset.shape, "builtin_size": preset.exemplar_size}
+    for name, value in preset.options.items():
+        if name in ("bandwidth", "bandwidth_factor"):
+            value = [value] if isinstance(value, (int, float)) else list(value)
+        elif name == "parent":
+            name, value = "no_parent", not value
+        values[name] = value
+    return values
+
+
+def _parse(parser: argparse.ArgumentParser, argv: list[str] | None) -> argparse.Namespace:
+    """Parse; with ``synth --preset``, parse again with the preset as the defaults."""
+    args = parser.parse_args(argv)
+    if args.command != "synth" or args.preset is None:
+        return args
+    preset = get_preset(args.preset)
+    _SYNTH_PARSER[0].set_defaults(**_preset_defaults(preset))
+    args = parser.parse_args(argv)
+    if args.method != preset.method:
+        parser.error(f"--preset {preset.name} is for --method {preset.method}, not {args.method}")
+    return args
 
 
 def _add_devices(sub) -> None:
@@ -185,7 +219,7 @@ def _tracker(levels: int, records: list):
 
 #: Flags that only one method reads: given to the other, they are an error, not ignored.
 _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited",
-            "insert_slices", "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor",
+            "insert_slices", "insert_spacing", "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init")
 
@@ -203,6 +237,7 @@ def _ml_options(args) -> dict:
     """The ``synthesize`` options of ``--method ml`` from the command line."""
     options = dict(pyramid=args.pyramid, xi=args.xi, stop_fraction=args.stop_fraction, max_sweeps=args.max_sweeps,
                    upsampling=args.upsampling, inherited=args.inherited, insert_slices=args.insert_slices,
+                   insert_spacing=args.insert_spacing,
                    slice_layout=args.slice_layout,
                    initial_temperature=args.initial_temperature, builtin_size=args.builtin_size,
                    relaxation=args.relaxation, anneal_start=args.anneal_start, anneal_cooling=args.anneal_cooling,
@@ -254,7 +289,7 @@ def cmd_synth(args) -> int:
     sidecar = written.with_suffix(".json")
     meta = {"volume": str(written), "exemplar": str(args.exemplar), "written": written_kind,
             "values_exact": result.values_exact, "level_values": result.level_values.tolist(),
-            "seed": result.seed, "device": result.device, "params": result.params,
+            "seed": result.seed, "device": result.device, "preset": args.preset, "params": result.params,
             "voxel_size": voxel_size, "unit": args.unit,
             "versions": versions(), "timings": result.timings,
             "command": " ".join(sys.argv), "written_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
@@ -303,7 +338,7 @@ def cmd_devices(args) -> int:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``clsolid`` command; returns the exit code."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = _parse(parser, argv)
     if args.command == "evaluate":
         from .report import main_evaluate
 

@@ -16,7 +16,7 @@ from clsolid.ml.params import RELAXATIONS
 
 SHAPE = (32, 32, 32)
 FAST: dict = {}
-THESIS = dict(relaxation="icm", balance=0.0, slice_layout="aligned")
+THESIS = dict(relaxation="icm", balance=0.0, slice_layout="aligned", insert_slices=4)
 MATERIALS = ("composite3", "fibres", "porous80")
 
 
@@ -79,12 +79,11 @@ def test_every_relaxation_is_reproducible_by_seed(device, relaxation):
 # for voxel). A target that the defaults miss is a strict expected failure naming the value.
 TARGETS = {  # (exemplar, target): None if met, else why not
     ("composite3", "phase"): None, ("lamellae", "phase"): None, ("fibres", "phase"): None,
-    ("composite3", "mirror"): None, ("lamellae", "mirror"): None,  # lamellae: 0.096, near the line
-    ("gravel", "mirror"): "gravel's mirror correlation is 0.21: the grey textures' blocks stay x<->z-symmetric",
+    ("composite3", "mirror"): None, ("lamellae", "mirror"): None, ("gravel", "mirror"): None,
     ("composite3", "histogram"): None, ("gravel", "histogram"): None,
     ("composite3", "patch"): None, ("gravel", "patch"): None, ("fibres", "patch"): None,
-    ("gravel", "autocorrelation"): None, ("composite3", "autocorrelation"): None,  # composite3: 0.28
-    ("fibres", "autocorrelation"): "fibres' autocorrelation score is 0.43/0.39: some fibres merge",
+    ("gravel", "autocorrelation"): None, ("composite3", "autocorrelation"): None,  # composite3: 0.23
+    ("fibres", "autocorrelation"): "fibres' autocorrelation score is 0.41/0.40: some fibres merge",
 }
 LIMITS = {"phase": ("phase_error_pp", 3.0), "mirror": ("mirror_max", 0.1), "histogram": ("histogram_kl", 0.1),
           "patch": ("patch_sw", 0.3), "autocorrelation": ("autocorrelation_l2", 0.3)}

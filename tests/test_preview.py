@@ -60,7 +60,7 @@ def test_saved_png_is_the_rendered_image(tmp_path):
 
 
 def test_preview_slices_avoid_the_inserted_slices():
-    params = MLParams()  # 4 +in slices per constrained view, 3 scales
+    params = MLParams(insert_slices=4)  # 4 +in slices per constrained view, 3 scales
     shape = (64, 48, 64)
     taken = inserted_depths(shape, params)
     assert set(taken) == {"front", "right"} and taken["front"].tolist() == [0, 16, 32, 48]
@@ -69,6 +69,20 @@ def test_preview_slices_avoid_the_inserted_slices():
         assert np.min(np.abs(taken[view] - chosen[view])) == 8
     assert chosen["top"] == 24  # no +in slices: the middle
     assert far_depth(10, np.array([0])) == 5 and far_depth(7, np.empty(0, int)) == 3
+
+
+def test_default_slices_follow_the_spacing():
+    # About one slice every insert_spacing voxels, on multiples of 2^(scales-1), on each
+    # view's own depth axis; a count, when given, wins; 0 is -in.
+    for size, spacing in [(48, 6.0), (64, 6.0), (32, 6.0), (128, 6.0), (48, 12.0)]:
+        params = MLParams(insert_spacing=spacing)
+        depths = inserted_depths((size, 20, 2 * size), params)
+        assert len(depths["front"]) == round(size / spacing) and len(depths["right"]) == round(2 * size / spacing)
+        assert all(np.all(d % 4 == 0) for d in depths.values())
+    assert len(inserted_depths((48, 20, 48), MLParams(insert_slices=3))["front"]) == 3
+    assert all(d.size == 0 for d in inserted_depths((48, 20, 48), MLParams(insert_slices=0)).values())
+    with pytest.raises(InputError, match="insert_spacing"):
+        MLParams(insert_spacing=0.5)
 
 
 @pytest.mark.parametrize("kwargs, param", [

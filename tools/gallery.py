@@ -107,6 +107,7 @@ def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
     out: dict[str, Any] = {
         "seconds": seconds, "constrained": list(constrained), "scores": scores,
         "mirror": mirror, "mirror_max": max((r for r in mirror.values() if np.isfinite(r)), default=None),
+        "mirror_chance": metrics.mirror_chance(ex, min(vol.shape)),
         "copy": {"fraction": copy.fraction, "view": copy.view, "index": copy.index, "shift": list(copy.shift),
                  "inserted": bool(copy.index in slices[copy.view]), "chance": copy_chance(ex, min(vol.shape))},
         "inserted_depths": {v: d.tolist() for v, d in slices.items()},
@@ -148,6 +149,7 @@ def summarise(runs: list[dict]) -> dict[str, Any]:
         "phase_error_pp": _worst([r["phase_error_pp"] for r in runs]),
         "scores": {v: {k: _worst([r["scores"][v][k] for r in runs]) for k, _ in SCORES} for v in VIEWS},
         "mirror": _worst([r["mirror_max"] for r in runs]),
+        "mirror_chance": first["mirror_chance"],
         "copy": max((r["copy"] for r in runs), key=lambda c: c["fraction"]),
         "seconds": float(np.mean([r["seconds"] for r in runs])),
         "constrained": first["constrained"],
@@ -184,7 +186,9 @@ def markdown(rows: dict[str, dict], settings: dict) -> str:
         "Scores (F/R/T = front/right/top view): 0 = as close as two halves of the exemplar, 1 = no "
         "structure; – = not measurable for this exemplar. Phase err: largest phase-fraction error, "
         "percentage points. Mirror: correlation with the x↔z mirror after removing each y-plane's "
-        "mean (the largest over axis pairs with 3 views). Copy: largest fraction of a slice equal to a "
+        "mean (the largest over axis pairs with 3 views), and in brackets the level an isotropic "
+        "material with the exemplar's autocorrelation would give (a voxel near the plane z = x is "
+        "close to its mirror voxel). Copy: largest fraction of a slice equal to a "
         "shifted exemplar window, with the slice (view and depth; +in: an inserted slice) and, in "
         "brackets, its chance level: a window of the exemplar's lower half against its upper half."
         + (" Each cell is the worst seed; time is the mean." if len(settings["seeds"]) > 1 else ""),
@@ -201,7 +205,7 @@ def markdown(rows: dict[str, dict], settings: dict) -> str:
         copy = (f"{c['fraction']:.2f} {c['view'][0].upper()}{c['index']}{' +in' if c['inserted'] else ''} "
                 f"({c['chance']:.2f})")
         lines.append(f"| {name} | {kind} | {_fmt(row['phase_error_pp'], 1)} | " + " | ".join(cells)
-                     + f" | {_fmt(row['mirror'])} | {copy} | {row['seconds']:.1f} |")
+                     + f" | {_fmt(row['mirror'])} ({_fmt(row['mirror_chance'])}) | {copy} | {row['seconds']:.1f} |")
     lines += ["", "Targets met (scores in the constrained views):", ""]
     for key, label, limit, strict in TARGETS:
         verdicts = [meets(row, key, limit, strict) for row in rows.values()]

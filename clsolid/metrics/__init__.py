@@ -19,7 +19,8 @@ from .orientation import (OrientationField, dominant_orientation_deg, orientatio
                           orientation_histogram, structure_tensor_orientation)
 from .patches import patch_distance
 from .phases import chord_lengths, lineal_path, two_point_correlation, volume_fractions
-from .symmetry import CopyMatch, match_counts, max_copy_fraction, mirror_correlation, mirror_correlations
+from .symmetry import (CopyMatch, match_counts, max_copy_fraction, mirror_chance, mirror_correlation,
+                       mirror_correlations)
 
 __all__ = [
     "VIEWS", "evaluate", "view_slices", "first_order_stats", "quantise", "histogram_distance",
@@ -27,6 +28,6 @@ __all__ = [
     "structure_tensor_orientation", "OrientationField", "orientation_histogram",
     "dominant_orientation_deg", "orientation_distance", "trace_fringes", "Fringes",
     "fringe_distances", "patch_distance", "volume_fractions", "two_point_correlation",
-    "lineal_path", "chord_lengths", "mirror_correlation", "mirror_correlations", "max_copy_fraction",
+    "lineal_path", "chord_lengths", "mirror_correlation", "mirror_correlations", "mirror_chance", "max_copy_fraction",
     "CopyMatch", "match_counts",
 ]

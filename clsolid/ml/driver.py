@@ -36,13 +36,22 @@ def _view_offset(params: MLParams, view: str) -> float:
     return params.view_names.index(view) / params.views if params.slice_layout == "staggered" else 0.0
 
 
+def slice_count(size: int, params: MLParams) -> int:
+    """How many ``+in`` slices a view gets along a depth axis of *size* voxels (full resolution)."""
+    if params.insert_slices is not None:
+        return params.insert_slices
+    return max(1, round(size / params.insert_spacing))
+
+
 def inserted_depths(shape: tuple[int, int, int], params: MLParams) -> dict[str, np.ndarray]:
     """Full-resolution depths of the ``+in`` slices of each constrained view (front: z, right: x, top: y)."""
-    if params.insert_slices == 0:
-        return {view: np.empty(0, int) for view in params.view_names}
     step = 2 ** (params.scales - 1)
-    return {view: slice_depths(shape[DEPTH_AXIS[view]], params.insert_slices, step, _view_offset(params, view))
-            for view in params.view_names}
+    out = {}
+    for view in params.view_names:
+        size = shape[DEPTH_AXIS[view]]
+        count = slice_count(size, params)
+        out[view] = slice_depths(size, count, step, _view_offset(params, view)) if count else np.empty(0, int)
+    return out
 
 
 def far_depth(size: int, taken: np.ndarray) -> int:
@@ -62,11 +71,13 @@ def preview_depths(shape: tuple[int, int, int], params: MLParams) -> dict[str, i
     return {view: far_depth(shape[a], taken.get(view, np.empty(0, int))) for view, a in DEPTH_AXIS.items()}
 
 
-def insert_slices(vol: np.ndarray, labels_img: np.ndarray, params: MLParams, level: int, seed: int) -> np.ndarray:
-    """``+in``: tile the exemplar onto ``params.insert_slices`` slices of each constrained view.
+def insert_slices(vol: np.ndarray, labels_img: np.ndarray, params: MLParams, level: int, seed: int,
+                  full_shape: tuple[int, int, int]) -> np.ndarray:
+    """``+in``: tile the exemplar onto the ``+in`` slices of each constrained view.
 
-    Called at every scale with that scale's exemplar: the depths and tile shifts are the
-    full-resolution ones divided by 2^level (all multiples of 2^(scales-1)), so each slice
+    Called at every scale with that scale's exemplar: the depths (:func:`inserted_depths`
+    of the full-resolution *full_shape*) and tile shifts are the full-resolution ones
+    divided by 2^level (all multiples of 2^(scales-1)), so each slice
     persists from the coarsest scale down. With ``slice_layout="staggered"`` the views'
     slices sit at different depths and each shows the exemplar shifted by its own seeded
     offset, so that nothing maps the x axis onto z. Returns the mask of inserted voxels;
@@ -74,8 +85,6 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, params: MLParams, lev
     t = 1 ignores its neighbours, so untrusted slices would be overwritten unseen.
     """
     mask = np.zeros(vol.shape, bool)
-    if params.insert_slices == 0:
-        return mask
     step = 2 ** (params.scales - 1 - level)
     shift_rng = np.random.default_rng([seed, 0x1A5E])  # the same draws at every scale
     ex_slots = [-(-n // step) for n in labels_img.shape]
@@ -88,9 +97,8 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, params: MLParams, lev
         return np.tile(labels_img, reps)[shift[0]: shift[0] + rows, shift[1]: shift[1] + cols]
 
     Z, Y, X = vol.shape
-    for view in params.view_names:
-        depths = slice_depths(vol.shape[DEPTH_AXIS[view]], params.insert_slices, step, _view_offset(params, view))
-        for d in depths:
+    for view, full_depths in inserted_depths(full_shape, params).items():
+        for d in full_depths // 2**level:
             if view == "front":
                 vol[d], mask[d] = tiled(Y, X), True
             elif view == "right":
@@ -117,7 +125,7 @@ def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, 
             vol[::2, ::2, ::2] = coarse
         # Only the voxel at the even corner is inherited (t = 0), under 1/8 and 8/8 alike.
         temp[::2, ::2, ::2] = 0.0
-    inserted = insert_slices(vol, model.exemplar, params, model.level, seed)
+    inserted = insert_slices(vol, model.exemplar, params, model.level, seed, base.shape)
     temp[inserted] = 0.0
     return vol, temp
 
