@@ -18,7 +18,9 @@ METHODS = ("ml", "wl", "kopf")
 OUTPUTS = ("values", "labels")
 PLANNED_METHODS = ("chen-wang",)
 #: Options of the search methods (clsolid.search.params.SearchParams).
-_SEARCH_OPTIONS = ("iterations", "inner", "parent", "init")
+_SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order")
+#: Options of the search methods that are not parameters of the method (what to report).
+_SEARCH_REPORTS = ("site_map",)
 #: The neighbourhood side each method uses when none is given (ML: the thesis case; WL: ch5_np_common).
 DEFAULT_NEIGHBORHOOD = {"ml": 9, "wl": 7, "kopf": 7}
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
@@ -101,8 +103,13 @@ def synthesize(
         weights and grey-level histogram re-weighting (§1.6.2; a phase, never a blend, on
         an exemplar of at most 8 values). Their options are ``iterations`` (passes per scale, default 10),
         ``inner`` (most searches per voxel and pass, default 4), ``parent`` (the coarser
-        scale's 3x3 in every neighbourhood, default True) and ``init`` (``"upsample"``,
-        default, or ``"noise"``); they return float64 volumes of exemplar values or their means, and
+        scale's 3x3 in every neighbourhood, default True), ``init`` (``"upsample"``,
+        default, or ``"noise"``) and, for ``kopf``, ``rule`` (``"centres"``, the thesis's:
+        each view's matched centre; ``"overlap"``, Kopf et al.'s: every overlapping matched
+        square proposes a value), ``order`` (``"sets"``, default: conflict-free sets in
+        parallel; ``"lexicographic"``, ``"random"``, ``"morton"`` or ``"hilbert"``: one voxel
+        at a time, for small blocks), and ``site_map=True`` (with ``full_output``) adds the position
+        histogram, ``SynthesisResult.site_use``; they return float64 volumes of exemplar values or their means, and
         ``output="labels"`` is refused. The ML-only arguments and options (``heuristic``,
         ``relaxation`` ...) are refused with it, and the other way round.
     heuristic : str, optional
@@ -212,7 +219,7 @@ def synthesize(
         raise InputError(f"method={method!r} is not available{planned}; use one of {METHODS}")
     if output not in OUTPUTS:
         raise InputError(f"output={output!r} must be one of {', '.join(map(repr, OUTPUTS))}")
-    valid = (_ML_OPTIONS + _BACKEND_OPTIONS if method == "ml" else _SEARCH_OPTIONS) + ("builtin_size",)
+    valid = (_ML_OPTIONS + _BACKEND_OPTIONS if method == "ml" else _SEARCH_OPTIONS + _SEARCH_REPORTS) + ("builtin_size",)
     unknown = set(options) - set(valid)
     if unknown:
         raise InputError(f"unknown option(s) {sorted(unknown)} for method={method!r}; valid: {', '.join(valid)}")
@@ -262,10 +269,16 @@ def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, lev
         dev = select_device(device)
         name, make_matcher = dev.name, (lambda table: CLMatcher(dev, table))
     log.info("synthesising %s from a %s exemplar with %s on %s, seed %d", shape, image.shape, method, name, seed)
-    vol, timings = run_search(grey, shape, params, seed, make_matcher, progress)
+    site_map = options.get("site_map", False)
+    if not isinstance(site_map, bool):
+        raise InputError(f"site_map={site_map!r} must be True or False")
+    if site_map and not full_output:
+        raise InputError("site_map=True needs full_output=True (the map is SynthesisResult.site_use)")
+    vol, timings = run_search(grey, shape, params, seed, make_matcher, progress, count_sites=site_map)
     if not full_output:
         return vol
     effective = {**params.to_dict(), "levels": levels, "shape": list(shape)}
+    use = timings.pop("site_use", None)  # an array: not a timing, and not JSON
     return SynthesisResult(volume=vol, labels=None, exemplar=grey, exemplar_labels=levels_of.labels,
                            level_values=levels_of.values, values_exact=levels_of.exact, seed=seed,
-                           params=effective, device=name, timings=timings)
+                           params=effective, device=name, timings=timings, site_use=use)

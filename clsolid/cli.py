@@ -19,6 +19,7 @@ from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildErro
 from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, RELAXATIONS, SLICE_LAYOUTS,
                      UPSAMPLING, MLParams)
 from .presets import PRESETS, Preset, get_preset
+from .search.params import ORDERS_ALL, RULES
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
 _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
@@ -53,7 +54,7 @@ def _add_synth(sub) -> None:
     p.add_argument("--method", default="ml", choices=("ml", "wl", "kopf"),
                    help="ml: NP-MRF maximum likelihood (default); wl: Wei-Levoy search and average; "
                         "kopf: Kopf et al. weights and histogram re-weighting "
-                        "(options --iterations, --inner, --no-parent, --init)")
+                        "(options --iterations, --inner, --no-parent, --init, and for kopf --rule)")
     d = MLParams()  # one source for the defaults; argparse shows them with %(default)s
     p.add_argument("--heuristic", default=d.heuristic,
                    help=f"view combination: {', '.join(HEURISTICS)} or a thesis/paper tag (default %(default)s)")
@@ -67,6 +68,15 @@ def _add_synth(sub) -> None:
                    help="wl: match the k x k square alone, without the coarser scale's 3 x 3")
     p.add_argument("--init", choices=("upsample", "noise"), default="upsample",
                    help="wl: a finer scale starts from the coarser result up-sampled (default) or from noise")
+    p.add_argument("--rule", choices=RULES, default="centres",
+                   help="kopf: a voxel's value from each view's matched centre (the thesis, default) or from "
+                        "every overlapping matched square (Kopf et al.)")
+    p.add_argument("--order", choices=ORDERS_ALL, default="sets",
+                   help="wl/kopf: conflict-free sets in parallel (default), or one voxel at a time in raster, "
+                        "random, Morton or Hilbert order (small blocks)")
+    p.add_argument("--site-map", type=Path, default=None,
+                   help="wl/kopf: PNG of the position histogram (how often each exemplar pixel is the best "
+                        "match of a voxel; red: never, blue: no complete neighbourhood)")
     p.add_argument("--scales", type=int, default=d.scales, help="decimation scales (default %(default)s)")
     p.add_argument("--pyramid", choices=PYRAMIDS, default=d.pyramid,
                    help="coarser exemplars: [1 2 1]/4 low-pass then 2:1 decimation, or plain decimation "
@@ -221,7 +231,7 @@ def _tracker(levels: int, records: list):
 _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited",
             "insert_slices", "insert_spacing", "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "indices", "track")
-_WL_ONLY = ("iterations", "inner", "no_parent", "init")
+_WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "site_map")
 
 
 def _check_method_flags(args) -> None:
@@ -251,7 +261,7 @@ def _ml_options(args) -> dict:
 
 def cmd_synth(args) -> int:
     from .api import synthesize
-    from .preview import save_preview
+    from .preview import save_preview, save_site_map
     from .ml.driver import preview_depths
     from .volumeio import save_volume
 
@@ -268,7 +278,13 @@ def cmd_synth(args) -> int:
     _check_method_flags(args)
     if args.method != "ml":
         options = dict(iterations=args.iterations, inner=args.inner, parent=not args.no_parent,
-                       init=args.init, builtin_size=args.builtin_size)
+                       init=args.init, order=args.order, builtin_size=args.builtin_size)
+        if args.rule != "centres":  # kopf's alone: SearchParams refuses it for wl
+            options["rule"] = args.rule
+        if args.site_map is not None:
+            if args.site_map.suffix.lower() != ".png":
+                raise InputError(f"--site-map {args.site_map} must end in .png")
+            options["site_map"] = True
     else:
         options = _ml_options(args)
     hooks = [] if args.quiet else [render_progress]
@@ -301,12 +317,14 @@ def cmd_synth(args) -> int:
         else:  # no +in slices to avoid: the middle of each axis
             views, depths = VIEW_SETS[args.views], {v: result.volume.shape[a] // 2 for v, a in DEPTH_AXIS.items()}
         save_preview(args.preview, result.exemplar, result.volume, constrained=views, depths=depths)
+    if args.site_map is not None:
+        save_site_map(args.site_map, result.site_use)
     if args.track is not None:
         args.track.parent.mkdir(parents=True, exist_ok=True)
         args.track.write_text(json.dumps({"exemplar": str(args.exemplar), "seed": result.seed,
                                           "records": records}, indent=2))
     if not args.quiet:
-        others = [str(p) for p in (sidecar, args.preview, args.track) if p is not None]
+        others = [str(p) for p in (sidecar, args.preview, args.site_map, args.track) if p is not None]
         files = others[0] if len(others) == 1 else f"{', '.join(others[:-1])} and {others[-1]}"
         print(f"wrote {written} ({'x'.join(map(str, result.volume.shape))} {written_kind}, seed {result.seed}, "
               f"{result.timings['total_s']:.1f}s on {result.device}), {files}", file=sys.stderr)

@@ -160,3 +160,40 @@ def save_preview(path: PathLike, exemplar: np.ndarray, volume: np.ndarray, *,
     p.parent.mkdir(parents=True, exist_ok=True)
     Image.fromarray(preview.image).save(p, format="PNG")
     return p
+
+
+#: Colours of the position-histogram map: valid pixels no voxel used, and pixels that are no
+#: site (no complete neighbourhood).
+UNUSED_RGB = (220, 30, 30)
+NO_SITE_RGB = (40, 60, 140)
+
+
+def render_site_map(use: np.ndarray, min_side: int = PREVIEW_MIN_SIDE) -> np.ndarray:
+    """The position histogram as an RGB image (thesis: how often each exemplar pixel is used).
+
+    Used pixels are grey, white for the most used, on a square-root scale (so that
+    pixels used a few times stay visible); valid pixels no voxel used are red
+    (:data:`UNUSED_RGB`); pixels with no complete neighbourhood, which cannot be matched,
+    dark blue (:data:`NO_SITE_RGB`). Enlarged by an integer factor to a side of at least
+    *min_side*.
+    """
+    use = np.asarray(use)
+    if use.ndim != 2 or use.size == 0 or not np.issubdtype(use.dtype, np.integer) or use.min() < -1:
+        raise InputError("use must be a non-empty 2D integer array of counts, -1 for no site "
+                         f"(SynthesisResult.site_use); got {use.dtype} {use.shape}")
+    top = max(1, int(use.max()))
+    grey = np.round(255 * np.sqrt(np.maximum(use, 0) / top)).astype(np.uint8)
+    rgb = np.repeat(grey[..., None], 3, axis=2)
+    rgb[use == 0] = UNUSED_RGB
+    rgb[use == -1] = NO_SITE_RGB
+    return enlarge(rgb, min_side)
+
+
+def save_site_map(path: PathLike, use: np.ndarray) -> pathlib.Path:
+    """Save :func:`render_site_map` of a position histogram as a PNG; returns the path."""
+    p = _as_path(path, "path")
+    _suffix(p, "path", (".png",))
+    image = render_site_map(use)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(image).save(p, format="PNG")
+    return p

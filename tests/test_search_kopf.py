@@ -57,3 +57,143 @@ def test_kopf_keeps_the_minority_phase_better_than_wl(device):
     err = {m: abs(np.mean(clsolid.synthesize(ex, (24, 24, 24), method=m, iterations=3, rng=1,
                                              device=device) < 128) - want) for m in ("wl", "kopf")}
     assert err["kopf"] < err["wl"], err
+
+
+# --------------------------------------------------------------------------- Kopf's own rule
+
+
+def _slow_support(level, vol, coarse):
+    """overlap_support by explicit loops: every voxel, view and offset, one proposal at a time."""
+    from clsolid.core.views import VIEW_AXES
+    from clsolid.search.kopf import MAX_PHASES, histogram_factor, robust_weights
+    from clsolid.search.match import square_offsets
+    from clsolid.search.wl import matches
+
+    sites, ssd = matches(level, vol, coarse, np.arange(vol.size), level.w_first)
+    hist = level.histogram
+    w = robust_weights(ssd, float(hist.values[-1] - hist.values[0]))
+    phases = level.values if level.values.size <= MAX_PHASES else None
+    num = np.zeros((1 if phases is None else phases.size,) + vol.shape)
+    den = np.zeros(vol.shape)
+    for u in range(vol.size):
+        pos = np.unravel_index(u, vol.shape)
+        for i, view in enumerate(level.params.view_names):
+            for j, (dr, dc) in enumerate(square_offsets(level.params.neighborhood)):
+                v = list(pos)
+                ra, ca = VIEW_AXES[view]
+                v[ra], v[ca] = (v[ra] + dr) % vol.shape[ra], (v[ca] + dc) % vol.shape[ca]
+                value = level.patches[sites[i, u], j]
+                weight = w[i, u] * histogram_factor(level, np.array([value]))[0]
+                den[tuple(v)] += weight
+                if phases is None:
+                    num[(0, *v)] += weight * value
+                else:
+                    num[(int(np.flatnonzero(phases == value)[0]), *v)] += weight
+    return phases, num, den
+
+
+@pytest.mark.parametrize("name", ["composite3", "gravel"])
+def test_overlap_support_matches_explicit_loops(name):
+    from clsolid.search.features import centre_weights, exemplar_features
+    from clsolid.search.kopf import overlap_support
+    from clsolid.search.level import Level
+
+    ex = gallery_exemplar(name, 64)[:20, :20].astype(np.float64)
+    k = 3
+    table, centres = exemplar_features(ex, None, k)
+    params = SearchParams(method="kopf", neighborhood=k, scales=1, rule="overlap")
+    vol = np.random.default_rng(0).choice(ex.ravel(), size=(4, 5, 6))
+    level = Level(params=params, matcher=ReferenceMatcher(table), centres=centres,
+                  patches=table[:, : k * k].astype(np.float64), values=np.unique(ex),
+                  w_first=centre_weights(k, False, centre=False), w_again=centre_weights(k, False, centre=True),
+                  histogram=LevelHistogram(ex, ex, vol))
+    phases, num, den, searches = overlap_support(level, vol, None)
+    slow = _slow_support(level, vol, None)
+    assert searches == 2 * vol.size and (phases is None) == (name == "gravel")
+    np.testing.assert_allclose(num, slow[1], rtol=1e-12)
+    np.testing.assert_allclose(den, slow[2], rtol=1e-12)
+    assert np.allclose(num.sum(axis=0), den) == (phases is not None)  # votes share out all the weight
+
+
+def test_balanced_vote_meets_the_target_and_leaves_unproposed_phases_out():
+    from clsolid.search.kopf import vote_balanced
+
+    rng = np.random.default_rng(1)
+    support = rng.gamma(2.0, size=(3, 4000)) * np.array([[4.0], [1.0], [1.0]])  # phase 0 favoured
+    target = np.array([0.2, 0.5, 0.3])
+    got = np.bincount(vote_balanced(support, target), minlength=3) / 4000
+    assert np.abs(got - target).max() < 0.02, got
+    assert np.bincount(np.argmax(support, axis=0), minlength=3)[0] / 4000 > 0.6  # unbalanced: the majority
+    support[2] = 0.0
+    assert 2 not in vote_balanced(support, target)
+
+
+def test_overlap_rule_keeps_fractions_and_is_reproducible(device):
+    ex = gallery_exemplar("porous80", 64)
+    # The minority phase is proposed by more voxels' squares pass after pass (6 % of the
+    # voxels have any pore proposed at the first finest pass, 27 % by the tenth): 10 passes.
+    run = lambda seed: clsolid.synthesize(ex, (24, 24, 24), method="kopf", rule="overlap", iterations=10,  # noqa: E731
+                                          rng=seed, device=device)
+    a = run(1)
+    assert set(np.unique(a)) <= {0.0, 255.0}
+    assert abs(np.mean(a == 0) - np.mean(ex == 0)) < 0.02
+    np.testing.assert_array_equal(a, run(1))
+    with pytest.raises(clsolid.InputError, match="rule"):
+        clsolid.synthesize(ex, (8, 8, 8), method="wl", rule="overlap")
+
+
+def test_cli_passes_the_rule(tmp_path, device):
+    import json
+
+    from clsolid.cli import main
+
+    out = tmp_path / "k.npy"
+    assert main(["synth", "brick", "-o", str(out), "--method", "kopf", "--rule", "overlap", "--shape", "8", "8", "8",
+                 "--scales", "1", "--neighborhood", "5", "--iterations", "1", "--seed", "2", "-q"]) == 0
+    assert json.loads((tmp_path / "k.json").read_text())["params"]["rule"] == "overlap"
+
+
+# --------------------------------------------------------------------------- position histogram
+
+
+def test_site_use_counts_every_voxel_and_view(device):
+    from clsolid.search.features import valid_sites
+
+    ex = gallery_exemplar("porous50", 64)[:24, :24]
+    res = clsolid.synthesize(ex, (8, 10, 12), method="kopf", neighborhood=5, scales=2, iterations=2, rng=1,
+                             device=device, full_output=True, site_map=True)
+    use = res.site_use
+    assert use.shape == ex.shape and "site_use" not in res.timings
+    assert use[use > 0].sum() == 2 * 8 * 10 * 12  # every voxel, both views, once
+    r, c = valid_sites(ex.shape, (12, 12), 5)
+    valid = np.zeros(ex.shape, bool)
+    valid[r, c] = True
+    assert np.all((use == -1) == ~valid)  # the border (and the parent's border) cannot be matched
+    assert np.all(use[:2] == -1) and np.all(use[:, -2:] == -1)
+    with pytest.raises(clsolid.InputError, match="full_output"):
+        clsolid.synthesize(ex, (8, 8, 8), method="kopf", scales=1, site_map=True)
+    with pytest.raises(clsolid.InputError, match="site_map"):
+        clsolid.synthesize(ex, (8, 8, 8), site_map=True)  # not an ml option
+
+
+def test_site_map_png_marks_unused_and_unmatchable_pixels(tmp_path):
+    from PIL import Image
+
+    from clsolid.preview import NO_SITE_RGB, UNUSED_RGB, save_site_map
+
+    use = np.array([[-1, -1, -1], [-1, 0, 4], [-1, 1, 0]])
+    img = np.asarray(Image.open(save_site_map(tmp_path / "m.png", use)))
+    k = img.shape[0] // 3
+    assert img.shape[0] >= 256 and tuple(img[0, 0]) == NO_SITE_RGB and tuple(img[k, k]) == UNUSED_RGB
+    assert tuple(img[k, 2 * k]) == (255, 255, 255) and tuple(img[2 * k, k]) == (128, 128, 128)  # sqrt(1/4)
+    with pytest.raises(clsolid.InputError, match="counts"):
+        save_site_map(tmp_path / "bad.png", np.zeros((2, 2, 2), int))
+
+
+def test_cli_writes_the_site_map(tmp_path, device):
+    from clsolid.cli import main
+
+    out = tmp_path / "k.npy"
+    assert main(["synth", "brick", "-o", str(out), "--method", "kopf", "--shape", "8", "8", "8", "--scales", "1",
+                 "--neighborhood", "5", "--iterations", "1", "--site-map", str(tmp_path / "map.png"), "-q"]) == 0
+    assert (tmp_path / "map.png").stat().st_size > 100

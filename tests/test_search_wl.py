@@ -177,6 +177,8 @@ def test_cli_wl_writes_volume_sidecar_and_preview(tmp_path, device):
     (["--method", "wl", "--xi", "-2"], "--xi not used by --method wl"),
     (["--method", "wl", "--indices"], "--indices not used by --method wl"),
     (["--iterations", "3"], "--iterations not used by --method ml"),
+    (["--rule", "overlap"], "--rule not used by --method ml"),
+    (["--method", "wl", "--rule", "overlap", "--shape", "8", "8", "8"], "rule='overlap' is kopf's"),
 ])
 def test_cli_refuses_flags_the_method_ignores(tmp_path, capsys, argv, word):
     from clsolid.cli import EXIT_USAGE, main

@@ -73,6 +73,11 @@ class SynthesisResult:
     timings : dict
         ``total_s`` and, per scale (coarsest first), the shape, sweeps, global
         temperatures and seconds per sweep.
+    site_use : ndarray or None
+        Search methods, when asked (``site_map=True``): the position histogram, ``(H, W)``
+        int64, how many voxel neighbourhoods (every voxel, every constrained view) of the
+        finished block are nearest to each exemplar pixel's; -1 where the pixel has no
+        complete neighbourhood. :func:`clsolid.preview.save_site_map` draws it.
     """
 
     volume: np.ndarray
@@ -85,6 +90,7 @@ class SynthesisResult:
     params: dict
     device: str
     timings: dict
+    site_use: np.ndarray | None = None
 
 
 def resolve_seed(rng) -> int:

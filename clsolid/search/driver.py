@@ -17,11 +17,12 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..core.orders import visiting_order
 from ..core.schedule import colour_sets, set_order, split_by_colour
 from ..core.synthesis import SweepInfo
 from ..errors import InputError
 from . import kopf, wl
-from .features import centre_weights, exemplar_features
+from .features import centre_weights, exemplar_features, site_use
 from .level import Level, LevelHistogram
 from .params import SearchParams
 from .pyramid import gaussian_pyramid
@@ -40,13 +41,16 @@ def level_shapes(shape: tuple[int, int, int], levels: int) -> list[tuple[int, in
 
 def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: SearchParams, seed: int,
                make_matcher: Callable[[np.ndarray], Any],
-           progress: Callable[[SweepInfo], None] | None = None) -> tuple[np.ndarray, dict]:
+               progress: Callable[[SweepInfo], None] | None = None,
+               count_sites: bool = False) -> tuple[np.ndarray, dict]:
     """Grow a ``shape`` block from a 2D *exemplar* (float grey levels) with ``params.method``.
 
     *make_matcher(table)* returns an object with ``best(queries, weights)`` (a
     :class:`~clsolid.search.match.CLMatcher` or :class:`~clsolid.search.match.ReferenceMatcher`).
     *progress* gets a :class:`~clsolid.core.synthesis.SweepInfo` after every pass (no
-    temperatures: those fields are NaN). Returns the float64 volume and timings.
+    temperatures: those fields are NaN). Returns the float64 volume and timings; with
+    *count_sites*, ``timings["site_use"]`` is the position histogram of the finished block
+    (:func:`~clsolid.search.features.site_use`: every voxel matched once more in every view).
     """
     k = params.neighborhood
     shapes = level_shapes(shape, params.scales)
@@ -63,6 +67,7 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
         use_parent = parent_img is not None
         vol = _start(pyr[level], shapes[level], coarse, params.init, seed, level)
         ctx = Level(params=params, matcher=make_matcher(table), centres=centres,
+                    patches=table[:, : k * k].astype(np.float64), values=np.unique(pyr[level]),
                     w_first=centre_weights(k, use_parent, centre=False),
                     w_again=centre_weights(k, use_parent, centre=True),
                     histogram=LevelHistogram(pyr[0], pyr[level], vol) if params.method == "kopf" else None)
@@ -71,15 +76,25 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
         sets = split_by_colour(np.ones(shapes[level], bool), colour, n_sets)
         searches = 0
         t_iter = time.perf_counter()
+        parent = coarse if use_parent else None
         for it in range(1, params.iterations + 1):
-            for c in set_order(n_sets, seed, level, it):
-                searches += update(ctx, vol, coarse if use_parent else None, sets[c])
+            if params.method == "kopf" and params.rule == "overlap":
+                searches += kopf.overlap_pass(ctx, vol, parent)
+            elif params.order != "sets":
+                for v in visiting_order(shapes[level], params.order, np.random.default_rng([seed, level, it])):
+                    searches += update(ctx, vol, parent, np.array([v]))
+            else:
+                for c in set_order(n_sets, seed, level, it):
+                    searches += update(ctx, vol, parent, sets[c])
             if progress is not None:
                 now = time.perf_counter()
                 progress(_report(params, level, it, shapes[level], now - t_iter, now - t0, pyr[level], vol))
             t_iter = time.perf_counter()
         timings["levels"].append({"level": level, "shape": list(shapes[level]), "n_sites": int(table.shape[0]),
                                   "searches": searches, "seconds": time.perf_counter() - t_level})
+        if count_sites and level == 0:
+            sites = wl.matches(ctx, vol, parent, np.arange(vol.size), ctx.w_first)[0]
+            timings["site_use"] = site_use(pyr[0].shape, None if parent_img is None else parent_img.shape, k, sites)
         coarse = vol
     timings["total_s"] = time.perf_counter() - t0
     return coarse, timings

@@ -31,15 +31,23 @@ def centre_weights(k: int, parent: bool, centre: bool) -> np.ndarray:
     return w
 
 
+def valid_sites(fine_shape: tuple[int, int], coarse_shape: tuple[int, int] | None,
+                k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column of every exemplar site whose k x k square (and, with a coarser level of
+    *coarse_shape*, its parent 3 x 3 square) lies inside the image, row-major."""
+    h = k // 2
+    rows, cols = np.mgrid[h : max(h, fine_shape[0] - h), h : max(h, fine_shape[1] - h)]
+    r, c = rows.ravel(), cols.ravel()
+    if coarse_shape is not None:  # the parent square must fit too
+        ok = ((r // 2 >= 1) & (r // 2 + 1 < coarse_shape[0]) & (c // 2 >= 1) & (c // 2 + 1 < coarse_shape[1]))
+        r, c = r[ok], c[ok]
+    return r, c
+
+
 def exemplar_features(fine: np.ndarray, coarse: np.ndarray | None, k: int) -> tuple[np.ndarray, np.ndarray]:
     """Feature rows ``(n_sites, dim)`` and centre values ``(n_sites,)`` of every valid site of
     the level image *fine* (with *coarse*, the next pyramid level, as parent), row-major."""
-    h = k // 2
-    rows, cols = np.mgrid[h : max(h, fine.shape[0] - h), h : max(h, fine.shape[1] - h)]
-    r, c = rows.ravel(), cols.ravel()
-    if coarse is not None:  # the parent square must fit too
-        ok = ((r // 2 >= 1) & (r // 2 + 1 < coarse.shape[0]) & (c // 2 >= 1) & (c // 2 + 1 < coarse.shape[1]))
-        r, c = r[ok], c[ok]
+    r, c = valid_sites(fine.shape, None if coarse is None else coarse.shape, k)
     if r.size == 0:
         raise InputError(f"a {fine.shape[0]}x{fine.shape[1]} pyramid level has no complete {k}x{k} "
                          "neighbourhood: use fewer scales or a smaller neighborhood")
@@ -49,6 +57,16 @@ def exemplar_features(fine: np.ndarray, coarse: np.ndarray | None, k: int) -> tu
         po = square_offsets(PARENT_SIDE)
         parts.append(coarse[r[:, None] // 2 + po[:, 0], c[:, None] // 2 + po[:, 1]])
     return np.ascontiguousarray(np.concatenate(parts, axis=1), np.float32), fine[r, c]
+
+
+def site_use(fine_shape: tuple[int, int], coarse_shape: tuple[int, int] | None, k: int,
+             sites: np.ndarray) -> np.ndarray:
+    """The position histogram: how many of *sites* (indices into :func:`valid_sites`) fall
+    on each exemplar pixel, ``(H, W)`` int64, and -1 where a pixel is no valid site."""
+    r, c = valid_sites(fine_shape, coarse_shape, k)
+    use = np.full(fine_shape, -1, np.int64)
+    use[r, c] = np.bincount(np.ravel(sites), minlength=r.size)
+    return use
 
 
 def voxel_features(volume: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray, view: str,

@@ -13,21 +13,46 @@ the weighted mean of the matches' centre values; on a categorical exemplar (at m
 values) the value with the largest total weight instead, so a voxel is always a phase.
 The block's histogram follows every voxel that changes, set by set (the thesis updates it
 voxel by voxel; a set's voxels see the histogram as the set began).
+
+``rule="overlap"`` is Kopf et al.'s own rule instead (:func:`overlap_pass`): every voxel's
+neighbourhood in every view is matched against the block as it stands, then every voxel
+takes the weighted mean (or, categorical, the weighted vote) of the values that all the
+matched squares overlapping it propose for it: k*k proposals per view, not one. Each
+proposal carries its square's robust weight and the histogram factor of the value it
+proposes. The whole block is matched, then updated (Kopf's alternation of a search step
+and an optimisation step), so a pass does not depend on a visiting order.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..core.views import VIEW_AXES
+from ..ml.balance import project_bias
 from .level import Level
+from .match import square_offsets
 from .wl import matches
 
 #: The robust norm's exponent ("as indicated by [Kwa05]").
 R = 0.8
 #: ``eps`` in the weight, relative to the exemplar's range.
 EPS_REL = 1e-3
+#: Scale of the log supports in the balanced vote's fit (:func:`vote_balanced`).
+SHARPNESS = 16.0
 #: An exemplar with at most this many values is categorical: its voxels take a phase, never a blend.
 MAX_PHASES = 8
+
+
+def robust_weights(ssd: np.ndarray, span: float) -> np.ndarray:
+    """Kopf's IRLS weight ``(||.|| + eps)^(r - 2)`` of squared distances *ssd*."""
+    return (np.sqrt(np.maximum(ssd, 0.0)) + EPS_REL * span) ** (R - 2.0)
+
+
+def histogram_factor(level: Level, values: np.ndarray) -> np.ndarray:
+    """``1 / (1 + s * max(0, H_solid(g) - H_exemplar(g)))`` for each proposed value's bin g."""
+    hist = level.histogram
+    g = hist.bin(values).reshape(values.shape)
+    return 1.0 / (1.0 + hist.values.size * np.maximum(0.0, hist.volume[g] - hist.exemplar[g]))
 
 
 def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray) -> int:
@@ -35,10 +60,7 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
     hist = level.histogram
     sites, ssd = matches(level, vol, coarse, voxels, level.w_first)
     values = level.centres[sites]  # (views, m)
-    span = float(hist.values[-1] - hist.values[0]) or 1.0
-    w = (np.sqrt(np.maximum(ssd, 0.0)) + EPS_REL * span) ** (R - 2.0)
-    g = hist.bin(values).reshape(values.shape)
-    w /= 1.0 + hist.values.size * np.maximum(0.0, hist.volume[g] - hist.exemplar[g])
+    w = robust_weights(ssd, float(hist.values[-1] - hist.values[0]) or 1.0) * histogram_factor(level, values)
     flat = vol.reshape(-1)
     old = flat[voxels].copy()
     if hist.values.size <= MAX_PHASES:
@@ -55,3 +77,64 @@ def vote(values: np.ndarray, weights: np.ndarray) -> np.ndarray:
     first view's on a tie)."""
     support = np.stack([(weights * (values == values[j])).sum(axis=0) for j in range(values.shape[0])])
     return values[np.argmax(support, axis=0), np.arange(values.shape[1])]
+
+
+def overlap_pass(level: Level, vol: np.ndarray, coarse: np.ndarray | None) -> int:
+    """One pass of Kopf's own rule over the whole block (in place). Returns the searches made."""
+    phases, num, den, searches = overlap_support(level, vol, coarse)
+    old = vol.ravel().copy()
+    if phases is None:
+        vol[...] = num[0] / den
+    else:
+        vol[...] = phases[vote_balanced(num.reshape(phases.size, -1), level.histogram.exemplar).reshape(vol.shape)]
+    level.histogram.replace(old, vol.ravel())
+    return searches
+
+
+def overlap_support(level: Level, vol: np.ndarray,
+                    coarse: np.ndarray | None) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, int]:
+    """Match every voxel in every view, and gather what the matched squares propose.
+
+    Returns ``(phases, num, den, searches)``. The square of voxel u matched at site p
+    proposes ``patches[p, j]`` for the voxel ``u + offset_j`` of the view's plane (wrapping),
+    with weight ``w_u * h(value)`` (robust weight, histogram factor). ``den`` sums the
+    weights each voxel receives; ``num[0]`` the weighted values (``phases`` None), or,
+    where the level's exemplar holds only phases (at most :data:`MAX_PHASES` values: the
+    finest level of a categorical exemplar), ``num[i]`` the weight proposing ``phases[i]``.
+    """
+    k = level.params.neighborhood
+    sites, ssd = matches(level, vol, coarse, np.arange(vol.size), level.w_first)  # (views, n)
+    hist = level.histogram
+    w = robust_weights(ssd, float(hist.values[-1] - hist.values[0]) or 1.0)
+    # Coarser levels of a categorical exemplar's pyramid are blends: they take the mean.
+    phases = level.values if level.values.size <= MAX_PHASES else None
+    num = np.zeros((1 if phases is None else phases.size,) + vol.shape)
+    den = np.zeros(vol.shape)
+    for i, view in enumerate(level.params.view_names):
+        axes = VIEW_AXES[view]
+        for j, shift in enumerate(square_offsets(k)):
+            proposed = level.patches[sites[i], j]  # what u's match says of u + offset_j
+            weight = (w[i] * histogram_factor(level, proposed)).reshape(vol.shape)
+            proposed = proposed.reshape(vol.shape)
+            den += np.roll(weight, tuple(shift), axis=axes)
+            if phases is None:
+                num[0] += np.roll(weight * proposed, tuple(shift), axis=axes)
+            else:
+                for p, value in enumerate(phases):
+                    num[p] += np.roll(weight * (proposed == value), tuple(shift), axis=axes)
+    return phases, num, den, sites.size
+
+
+def vote_balanced(support: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """Per voxel, the phase of largest ``log support + b`` (``support`` is ``(phases, n)``).
+
+    The per-phase bias b is the likelihood method's balance (:func:`clsolid.ml.balance.project_bias`)
+    fitted to the sharpened scores ``SHARPNESS * log support``: with them, the softmax that
+    the balance matches to the *target* fractions is close to the argmax that decides (at
+    sharpness 1 diffuse supports missed a 0.2 target by 10 points; at 16, by 0.1). Kopf's histogram factor only
+    lowers the weight of a phase the block has too much of, by at most 1 / (1 + s); that
+    left porous80's pores at 6 % instead of 23 % at 32^3. A phase no square proposes
+    anywhere (support 0) stays out.
+    """
+    logs = SHARPNESS * np.log(np.maximum(support.T, np.finfo(np.float64).tiny))
+    return np.argmax(logs + project_bias(logs, target), axis=1)

@@ -40,13 +40,16 @@ class LevelHistogram:
 
 @dataclass
 class Level:
-    """One level's matcher and tables: ``centres[s]`` is site s's centre value; the first
-    search of a voxel weighs its terms by ``w_first`` (centre left out), repeated ones by
-    ``w_again``; ``histogram`` only for ``kopf``."""
+    """One level's matcher and tables: ``centres[s]`` is site s's centre value and
+    ``patches[s]`` its k x k square, row by row; ``values`` the level image's distinct
+    values; the first search of a voxel weighs its terms by ``w_first`` (centre left out),
+    repeated ones by ``w_again``; ``histogram`` only for ``kopf``."""
 
     params: SearchParams
     matcher: Any
     centres: np.ndarray
+    patches: np.ndarray
+    values: np.ndarray
     w_first: np.ndarray
     w_again: np.ndarray
     histogram: LevelHistogram | None = None

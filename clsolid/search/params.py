@@ -5,6 +5,7 @@ from __future__ import annotations
 import numbers
 from dataclasses import asdict, dataclass
 
+from ..core.orders import ORDERS
 from ..core.views import VIEW_SETS
 from ..errors import InputError
 from .match import check_side
@@ -14,6 +15,12 @@ METHODS = ("wl", "kopf")
 #: How a finer level starts (thesis_spec §1.3, ambiguous there): the coarser result
 #: up-sampled (Kopf), or fresh noise tied to the coarser level only by the parent square.
 INITS = ("upsample", "noise")
+#: kopf's rule for a voxel's new value: the thesis's (each view's matched centre) or Kopf et
+#: al.'s own (every overlapping matched square proposes a value; clsolid.search.kopf).
+RULES = ("centres", "overlap")
+#: "sets": conflict-free sets in parallel, in a seeded order (fast, the default); the others
+#: visit one voxel at a time in that order (clsolid.core.orders; small blocks, fidelity checks).
+ORDERS_ALL = ("sets",) + ORDERS
 
 
 def _int_in(name: str, value, lo: int, hi: int) -> int:
@@ -54,6 +61,16 @@ class SearchParams:
         from noise, every full-square neighbourhood is nearest to the flat patches of the
         majority phase, and a binary exemplar collapses to it). The coarsest level always
         starts from noise.
+    rule : {"centres", "overlap"}
+        ``kopf`` only: the thesis's rule (each view's matched centre value, set by set) or
+        Kopf et al.'s (the whole block matched, then each voxel takes the weighted mean or
+        vote of what every overlapping matched square proposes for it).
+    order : {"sets", "lexicographic", "random", "morton", "hilbert"}
+        How a pass visits the voxels: conflict-free sets updated in parallel, the sets in a
+        seeded order (default; equal to a sequential pass in an order that visits set after
+        set), or one voxel at a time along a raster, a seeded random permutation (drawn
+        anew every pass), or the 3D Morton or Hilbert curve (thesis App. B; one search per
+        voxel and view, so for small blocks).
     """
 
     method: str = "wl"
@@ -64,6 +81,8 @@ class SearchParams:
     inner: int = 4
     parent: bool = True
     init: str = "upsample"
+    rule: str = "centres"
+    order: str = "sets"
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -76,6 +95,15 @@ class SearchParams:
             raise InputError(f"views={self.views!r} must be 2 (front + right) or 3 (front + right + top)")
         if self.init not in INITS:
             raise InputError(f"init={self.init!r} must be one of {', '.join(map(repr, INITS))}")
+        if self.rule not in RULES:
+            raise InputError(f"rule={self.rule!r} must be one of {', '.join(map(repr, RULES))}")
+        if self.rule != "centres" and self.method != "kopf":
+            raise InputError(f"rule={self.rule!r} is kopf's; method {self.method!r} has only 'centres'")
+        if self.order not in ORDERS_ALL:
+            raise InputError(f"order={self.order!r} must be one of {', '.join(map(repr, ORDERS_ALL))}")
+        if self.order != "sets" and self.rule == "overlap":
+            raise InputError("rule='overlap' matches and updates the whole block at once: it has no visiting "
+                             "order (use order='sets')")
         if not isinstance(self.parent, bool):
             raise InputError(f"parent={self.parent!r} must be True or False")
 
