@@ -4,7 +4,7 @@ Importing clsolid does not touch OpenCL; a device is chosen when a synthesis run
 (:func:`select_device`, the ``device=`` argument, ``$CLSOLID_DEVICE`` or ``$PYOPENCL_CTX``).
 """
 
-from .api import synthesize
+from .api import resume, synthesize
 from .core.device import Device, list_devices, select_device
 from .errors import (ClsolidError, DeviceMemoryError, DeviceSkippedWarning, InputError, KernelBuildError,
                      NoDeviceError)
@@ -14,7 +14,7 @@ from .ml.driver import SweepInfo, SynthesisResult
 __version__ = "0.1.0"
 
 __all__ = [
-    "synthesize", "select_device", "list_devices", "Device", "SweepInfo", "SynthesisResult",
+    "synthesize", "resume", "select_device", "list_devices", "Device", "SweepInfo", "SynthesisResult",
     "HEURISTICS", "ClsolidError", "InputError", "NoDeviceError", "DeviceMemoryError",
     "KernelBuildError", "DeviceSkippedWarning", "__version__",
 ]

@@ -18,7 +18,7 @@ METHODS = ("ml", "wl", "kopf")
 OUTPUTS = ("values", "labels")
 PLANNED_METHODS = ("chen-wang",)
 #: Options of the search methods (clsolid.search.params.SearchParams).
-_SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order")
+_SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order", "causal")
 #: Options of the search methods that are not parameters of the method (what to report).
 _SEARCH_REPORTS = ("site_map",)
 #: The neighbourhood side each method uses when none is given (ML: the thesis case; WL: ch5_np_common).
@@ -28,6 +28,8 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch")
+#: Options of a likelihood run that are not parameters of the method (where to save it).
+_RUN_OPTIONS = ("checkpoint", "checkpoint_every")
 
 
 def is_reference(device) -> bool:
@@ -108,7 +110,8 @@ def synthesize(
         each view's matched centre; ``"overlap"``, Kopf et al.'s: every overlapping matched
         square proposes a value), ``order`` (``"sets"``, default: conflict-free sets in
         parallel; ``"lexicographic"``, ``"random"``, ``"morton"`` or ``"hilbert"``: one voxel
-        at a time, for small blocks), and ``site_map=True`` (with ``full_output``) adds the position
+        at a time, for small blocks), ``causal`` (the L-shaped neighbourhood instead of the
+        full square; default False), and ``site_map=True`` (with ``full_output``) adds the position
         histogram, ``SynthesisResult.site_use``; they return float64 volumes of exemplar values or their means, and
         ``output="labels"`` is refused. The ML-only arguments and options (``heuristic``,
         ``relaxation`` ...) are refused with it, and the other way round.
@@ -219,7 +222,8 @@ def synthesize(
         raise InputError(f"method={method!r} is not available{planned}; use one of {METHODS}")
     if output not in OUTPUTS:
         raise InputError(f"output={output!r} must be one of {', '.join(map(repr, OUTPUTS))}")
-    valid = (_ML_OPTIONS + _BACKEND_OPTIONS if method == "ml" else _SEARCH_OPTIONS + _SEARCH_REPORTS) + ("builtin_size",)
+    valid = (_ML_OPTIONS + _BACKEND_OPTIONS + _RUN_OPTIONS if method == "ml"
+             else _SEARCH_OPTIONS + _SEARCH_REPORTS) + ("builtin_size",)
     unknown = set(options) - set(valid)
     if unknown:
         raise InputError(f"unknown option(s) {sorted(unknown)} for method={method!r}; valid: {', '.join(valid)}")
@@ -235,16 +239,81 @@ def synthesize(
                       heuristic="h2-product" if heuristic is None else heuristic, **{k: options[k] for k in _ML_OPTIONS if k in options})
     image, levels_of, seed = _load(exemplar, levels, rng, options)
     backend = make_backend(device, {k: options[k] for k in _BACKEND_OPTIONS if k in options})
+    hook = None
+    if options.get("checkpoint") is not None:
+        from .ml.checkpoints import check_every, checkpointer
+
+        meta = {"method": method, "params": params.to_dict(), "shape": list(shape), "seed": seed,
+                "device": backend.name}
+        hook = checkpointer(options["checkpoint"], check_every(options.get("checkpoint_every", 0.0)), meta, image)
     log.info("synthesising %s from a %s exemplar on %s, seed %d", shape, image.shape, backend.name, seed)
-    vol, timings, bandwidths = run_ml(levels_of.labels, shape, params, seed, backend, progress)
+    return _run_ml(levels_of, shape, params, seed, backend, progress, output, full_output, hook, None)
+
+
+def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_output, hook, state):
+    """Run (or, from *state*, go on with) a likelihood synthesis and shape its result."""
+    vol, timings, bandwidths = run_ml(levels_of.labels, shape, params, seed, backend, progress,
+                                      checkpoint=hook, resume=state)
     labels = np.rint(vol).astype(np.uint8 if levels_of.values.size <= 256 else np.uint16)
     if not full_output:
         return labels if output == "labels" else levels_of.to_values(labels)
-    effective = {"method": method, **params.to_dict(), "bandwidth_effective": bandwidths, "shape": list(shape)}
+    effective = {"method": "ml", **params.to_dict(), "bandwidth_effective": bandwidths, "shape": list(shape)}
     return SynthesisResult(volume=levels_of.to_values(labels), labels=labels,
                            exemplar=levels_of.to_values(levels_of.labels), exemplar_labels=levels_of.labels,
                            level_values=levels_of.values, values_exact=levels_of.exact,
                            seed=seed, params=effective, device=backend.name, timings=timings)
+
+
+def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | None = None,
+           output: str = "values", full_output: bool = False, checkpoint_every: float = 0.0):
+    """Go on with a likelihood synthesis from its checkpoint folder, and keep checkpointing there.
+
+    Parameters
+    ----------
+    checkpoint : str or path
+        The folder a run of :func:`synthesize` wrote with ``checkpoint=``.
+    device, progress, output, full_output
+        As for :func:`synthesize`. Everything else (exemplar, shape, parameters, seed) is
+        the checkpoint's.
+    checkpoint_every : float
+        Seconds between the checkpoints written from now on (0: after every sweep).
+
+    Returns
+    -------
+    As :func:`synthesize`. On the device that began the run, the volume is identical to
+    the one the run would have made without stopping; another device grows an equally
+    valid but different one (its floats differ in the last bits), with a warning.
+
+    Raises
+    ------
+    clsolid.core.checkpoint.CheckpointError
+        No checkpoint in the folder, a corrupt one, or one whose state does not fit its
+        own parameters.
+    """
+    from .core.checkpoint import CheckpointError
+    from .exemplar import level_map
+    from .ml.checkpoints import check_every, checkpointer, load_run
+    from .ml.model import scale_shape
+
+    if output not in OUTPUTS:
+        raise InputError(f"output={output!r} must be one of {', '.join(map(repr, OUTPUTS))}")
+    meta, params, image, state = load_run(checkpoint)
+    shape = check_shape(tuple(meta["shape"]))
+    levels_of = level_map(image, params.levels)
+    level = params.scales - 1 - state.scale
+    expected = scale_shape(shape, level) if 0 <= level < params.scales else None
+    if expected is None or state.volume.size != int(np.prod(expected)):
+        raise CheckpointError(f"{checkpoint}: the saved volume ({state.volume.size} voxels) does not fit scale "
+                              f"{state.scale + 1} of a {shape} run: the checkpoint is corrupt")
+    backend = make_backend(device, {})
+    if backend.name != meta.get("device"):
+        log.warning("resuming on %s a run begun on %s: the volume will differ from the uninterrupted one",
+                    backend.name, meta.get("device"))
+    hook = checkpointer(checkpoint, check_every(checkpoint_every), {k: v for k, v in meta.items()
+                                                                    if k not in ("timings", "format", "state_sha256")},
+                        image)
+    log.info("resuming %s at scale %d, after sweep %d", checkpoint, state.scale + 1, state.sweep)
+    return _run_ml(levels_of, shape, params, int(meta["seed"]), backend, progress, output, full_output, hook, state)
 
 
 def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, levels, rng, device, progress,

@@ -74,6 +74,8 @@ def _add_synth(sub) -> None:
     p.add_argument("--order", choices=ORDERS_ALL, default="sets",
                    help="wl/kopf: conflict-free sets in parallel (default), or one voxel at a time in raster, "
                         "random, Morton or Hilbert order (small blocks)")
+    p.add_argument("--causal", action="store_true",
+                   help="wl/kopf: match the L-shaped causal neighbourhood instead of the full square")
     p.add_argument("--site-map", type=Path, default=None,
                    help="wl/kopf: PNG of the position histogram (how often each exemplar pixel is the best "
                         "match of a voxel; red: never, blue: no complete neighbourhood)")
@@ -119,6 +121,14 @@ def _add_synth(sub) -> None:
     p.add_argument("--balance", type=float, default=d.balance,
                    help="label-histogram balance in [0, 1]: each sweep aims that far from the unbiased "
                         "fractions towards the exemplar's (default %(default)s = exactly; 0 = off, the thesis)")
+    p.add_argument("--checkpoint", type=Path, default=None,
+                   help="ml: save the run's state in this folder after every sweep (see --checkpoint-every), "
+                        "so that --resume can go on after a crash or Ctrl-C")
+    p.add_argument("--checkpoint-every", type=float, default=0.0,
+                   help="seconds between checkpoints (default 0: after every sweep; always at the end of a scale)")
+    p.add_argument("--resume", type=Path, default=None,
+                   help="go on with the run saved in this checkpoint folder (its exemplar, shape, settings and "
+                        "seed; give only -o and output options) and keep checkpointing there")
     p.add_argument("--builtin-size", type=int, default=64, help="side of a built-in exemplar (default 64)")
     p.add_argument("--seed", type=int, default=None, help="random seed (default: fresh, recorded in the sidecar)")
     p.add_argument("--device", default=None,
@@ -231,7 +241,21 @@ def _tracker(levels: int, records: list):
 _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited",
             "insert_slices", "insert_spacing", "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "indices", "track")
-_WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "site_map")
+_WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "site_map")
+
+
+#: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
+_RESUME_FIXED = ("exemplar", "shape", "method", "preset", "heuristic", "neighborhood", "scales", "views", "levels",
+                 "seed", "builtin_size", "checkpoint", "track") + _WL_ONLY + tuple(
+                     n for n in _ML_ONLY if n not in ("indices", "track"))
+
+
+def _check_resume_flags(args) -> None:
+    given = [name for name in _RESUME_FIXED if getattr(args, name) != SYNTH_DEFAULTS[name]]
+    if given:
+        flags = ", ".join(name if name == "exemplar" else "--" + name.replace("_", "-") for name in given)
+        raise InputError(f"--resume goes on with the checkpoint's own exemplar, settings and seed (and "
+                         f"checkpoints there): drop {flags}")
 
 
 def _check_method_flags(args) -> None:
@@ -260,7 +284,7 @@ def _ml_options(args) -> dict:
 
 
 def cmd_synth(args) -> int:
-    from .api import synthesize
+    from .api import resume, synthesize
     from .preview import save_preview, save_site_map
     from .ml.driver import preview_depths
     from .volumeio import save_volume
@@ -276,9 +300,14 @@ def cmd_synth(args) -> int:
             raise InputError(f"--voxel-size takes one value or three (Z Y X), not {len(args.voxel_size)}")
         voxel_size = args.voxel_size[0] if len(args.voxel_size) == 1 else tuple(args.voxel_size)
     _check_method_flags(args)
+    if args.resume is not None:
+        _check_resume_flags(args)
+    elif args.checkpoint is not None and args.method != "ml":
+        raise InputError(f"--checkpoint is for --method ml; {args.method} runs are not checkpointed yet")
     if args.method != "ml":
         options = dict(iterations=args.iterations, inner=args.inner, parent=not args.no_parent,
-                       init=args.init, order=args.order, builtin_size=args.builtin_size)
+                       init=args.init, order=args.order, causal=args.causal,
+                       builtin_size=args.builtin_size)
         if args.rule != "centres":  # kopf's alone: SearchParams refuses it for wl
             options["rule"] = args.rule
         if args.site_map is not None:
@@ -292,18 +321,25 @@ def cmd_synth(args) -> int:
     if args.track is not None:
         hooks.append(_tracker(256 if args.levels is None else args.levels, records))
     heuristic = args.heuristic if args.method == "ml" else None
-    result = synthesize(args.exemplar, tuple(args.shape), method=args.method, heuristic=heuristic,
-                        neighborhood=args.neighborhood, scales=args.scales, views=args.views,
-                        levels=args.levels, rng=args.seed, device=args.device,
-                        progress=(lambda info: [h(info) for h in hooks]) if hooks else None,
-                        full_output=True, **options)
+    report = (lambda info: [h(info) for h in hooks]) if hooks else None
+    if args.resume is not None:
+        result = resume(args.resume, device=args.device, progress=report, full_output=True,
+                        checkpoint_every=args.checkpoint_every)
+    else:
+        if args.checkpoint is not None:
+            options.update(checkpoint=args.checkpoint, checkpoint_every=args.checkpoint_every)
+        result = synthesize(args.exemplar, tuple(args.shape), method=args.method, heuristic=heuristic,
+                            neighborhood=args.neighborhood, scales=args.scales, views=args.views,
+                            levels=args.levels, rng=args.seed, device=args.device, progress=report,
+                            full_output=True, **options)
     written_kind = "indices" if args.indices else "values"
     written = save_volume(args.output, result.labels if args.indices else result.volume,
                           voxel_size=voxel_size, unit=args.unit,
                           metadata={"seed": result.seed, "written": written_kind,
                                     "levels": int(result.level_values.size)})
     sidecar = written.with_suffix(".json")
-    meta = {"volume": str(written), "exemplar": str(args.exemplar), "written": written_kind,
+    meta = {"volume": str(written), "exemplar": str(args.exemplar) if args.resume is None else None,
+            "resumed_from": None if args.resume is None else str(args.resume), "written": written_kind,
             "values_exact": result.values_exact, "level_values": result.level_values.tolist(),
             "seed": result.seed, "device": result.device, "preset": args.preset, "params": result.params,
             "voxel_size": voxel_size, "unit": args.unit,
@@ -370,7 +406,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"clsolid: error: {exc}", file=sys.stderr)
         return next((code for cls, code in _EXIT_OF if isinstance(exc, cls)), EXIT_FAIL)
     except KeyboardInterrupt:
-        print("clsolid: interrupted", file=sys.stderr)
+        folder = getattr(args, "resume", None) or getattr(args, "checkpoint", None)
+        hint = f"; the last checkpoint is in {folder}: go on with --resume {folder}" if folder else ""
+        print(f"clsolid: interrupted{hint}", file=sys.stderr)
         return 130
 
 

@@ -78,3 +78,27 @@ def test_sequential_order_runs_and_is_refused_with_the_overlap_rule(device):
                                                         iterations=2, rng=1, device=device))
     with pytest.raises(InputError, match="no visiting"):
         clsolid.synthesize(ex, (8, 8, 8), method="kopf", order="hilbert", rule="overlap")
+
+
+def test_causal_weights_keep_only_what_a_raster_has_visited():
+    from clsolid.search.features import centre_weights
+
+    w = centre_weights(5, True, centre=True, causal=True)
+    assert w[:12].tolist() == [1.0] * 12 and w[12:25].tolist() == [0.0] * 13  # rows above, left half
+    assert w[25:].tolist() == [1.0] * 9  # the parent square whole
+    assert centre_weights(5, False, centre=False).sum() == 24
+
+
+def test_causal_raster_run(monkeypatch, device):
+    from clsolid.search import features
+
+    calls = []
+    inner = features.centre_weights
+    monkeypatch.setattr(driver, "centre_weights", lambda *a, **kw: calls.append(kw) or inner(*a, **kw))
+    ex = gallery_exemplar("porous50", 64)
+    a = clsolid.synthesize(ex, (8, 8, 8), method="wl", causal=True, order="lexicographic", scales=2, iterations=1,
+                           rng=1, device=device)
+    assert calls and all(kw["causal"] for kw in calls)
+    assert a.shape == (8, 8, 8) and np.isfinite(a).all()
+    with pytest.raises(InputError, match="whole"):
+        clsolid.synthesize(ex, (8, 8, 8), method="kopf", causal=True, rule="overlap")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
@@ -207,6 +208,41 @@ class _Clock:
         return float(here + later)
 
 
+@dataclass
+class RunState:
+    """Where a relaxation stands after a sweep: everything it needs to go on identically.
+
+    ``scale`` indexes the scales coarsest first; ``done`` says the scale ended with this
+    sweep. The random streams need no saving: Philox draws are keyed by (seed, voxel,
+    scale, sweep), and each sweep's set order by (seed, scale, sweep).
+    """
+
+    scale: int
+    sweep: int
+    done: bool
+    volume: np.ndarray
+    temperature: np.ndarray
+    inherited: np.ndarray
+    t_init: float
+    target: float
+    t_now: float
+    bias: np.ndarray
+    timings: dict
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The state as named arrays (for :func:`clsolid.core.checkpoint.write_checkpoint`)."""
+        return {"volume": self.volume, "temperature": self.temperature, "inherited": self.inherited,
+                "bias": self.bias, "scalars": np.array([self.t_init, self.target, self.t_now]),
+                "position": np.array([self.scale, self.sweep, int(self.done)])}
+
+    @classmethod
+    def from_arrays(cls, a: dict[str, np.ndarray], timings: dict) -> "RunState":
+        scale, sweep, done = (int(v) for v in a["position"])
+        t_init, target, t_now = (float(v) for v in a["scalars"])
+        return cls(scale, sweep, bool(done), a["volume"], a["temperature"], a["inherited"].astype(bool),
+                   t_init, target, t_now, a["bias"], timings)
+
+
 def run_ml(
     labels_img: np.ndarray,
     shape: tuple[int, int, int],
@@ -214,6 +250,8 @@ def run_ml(
     seed: int,
     backend: Any,
     progress: Callable[[SweepInfo], None] | None = None,
+    checkpoint: Callable[[RunState], None] | None = None,
+    resume: RunState | None = None,
 ) -> tuple[np.ndarray, dict, list[float]]:
     """Run the multi-scale relaxation on quantised exemplar labels with a back end.
 
@@ -223,6 +261,10 @@ def run_ml(
     every voxel is visited in every sweep (trusted ones too, unless ``inherited="fixed"``);
     the global temperature t_in starts each scale at ``anneal_start`` and is multiplied by
     ``anneal_cooling`` after each sweep, and the stop rule applies to it.
+
+    *checkpoint*, if given, receives a :class:`RunState` after every sweep; *resume*
+    continues from one (its volume, temperatures and bias restored on the back end), and
+    gives the same volume as the run that was never stopped.
 
     Returns the full-resolution volume, the timings and the per-scale bandwidths.
     """
@@ -237,22 +279,39 @@ def run_ml(
     n_sweeps = params.sweeps or params.max_sweeps
     coarse = None
     timings: dict = {"scales": []}
+    if resume is not None:
+        timings = {"scales": [dict(r) for r in resume.timings["scales"]]}
+        if resume.done:  # the checkpoint ended a scale: the next one starts from its volume
+            coarse = np.asarray(resume.volume, dtype=np.float64).reshape(models[resume.scale].shape)
     for i, model in enumerate(models):
+        if resume is not None and (i < resume.scale or (i == resume.scale and resume.done)):
+            continue
         t_scale = time.perf_counter()
-        vol, temp = start_state(model, base, coarse, params, seed)
-        inherited = temp == 0
-        if annealing:
-            temp[...] = 0.0  # no pixel temperatures: every neighbour's weight 1 - t is 1
+        first = 1
+        if resume is not None and i == resume.scale:  # go on with the sweep after the checkpoint's
+            r = resume
+            vol, temp, inherited = r.volume.reshape(model.shape), r.temperature.reshape(model.shape), r.inherited
+            t_init, target, t_now, first = r.t_init, r.target, r.t_now, r.sweep + 1
+            record = timings["scales"].pop()
+        else:
+            vol, temp = start_state(model, base, coarse, params, seed)
+            inherited = temp == 0
+            if annealing:
+                temp[...] = 0.0  # no pixel temperatures: every neighbour's weight 1 - t is 1
+            t_init = params.anneal_start if annealing else float(temp.sum())
+            target = 0.0 if params.sweeps else (1.0 - params.stop_fraction) * t_init
+            t_now = t_init
+            record = {"level": model.level, "shape": list(model.shape), "bandwidth": model.bandwidth,
+                      "n_sites": model.n_sites, "n_sets": model.n_sets, "initial_temperature": t_init,
+                      "temperatures": [], "visited": [], "sweep_seconds": []}
         backend.start_scale(model, vol, temp, params)
-        t_init = params.anneal_start if annealing else float(temp.sum())
-        target = 0.0 if params.sweeps else (1.0 - params.stop_fraction) * t_init
         balance = Balance(model, params.balance, vol) if params.balance else None
         bias = np.zeros(model.labels.size)
-        record = {"level": model.level, "shape": list(model.shape), "bandwidth": model.bandwidth,
-                  "n_sites": model.n_sites, "n_sets": model.n_sets, "initial_temperature": t_init,
-                  "temperatures": [], "visited": [], "sweep_seconds": []}
-        t_now = t_init
-        for sweep in range(1, n_sweeps + 1):
+        if resume is not None and i == resume.scale:
+            bias = np.array(resume.bias, dtype=np.float64)
+            if balance is not None:
+                balance.bias = bias
+        for sweep in range(first, n_sweeps + 1):
             t_sweep = time.perf_counter()
             if annealing:
                 active = ~inherited | resynth
@@ -282,6 +341,11 @@ def run_ml(
             else:
                 done = t_now <= target or t_now == 0.0 or sweep == n_sweeps
             log.debug("scale %d sweep %d: T=%.1f visited=%d %.2fs", i + 1, sweep, t_now, visited, sweep_s)
+            if checkpoint is not None:  # before progress, so that a Ctrl-C there keeps this sweep
+                checkpoint(RunState(i, sweep, done, np.array(backend.volume(), copy=True),
+                                    np.array(backend.temperature(), copy=True), inherited.copy(), t_init, target,
+                                    t_now, np.array(bias, dtype=np.float64),
+                                    {"scales": timings["scales"] + [record]}))
             if progress is not None:
                 eta = clock.eta(i, sweep_s, visited, model, t_now, t_prev, target,
                                 0 if done else n_sweeps - sweep)

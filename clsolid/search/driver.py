@@ -68,8 +68,8 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
         vol = _start(pyr[level], shapes[level], coarse, params.init, seed, level)
         ctx = Level(params=params, matcher=make_matcher(table), centres=centres,
                     patches=table[:, : k * k].astype(np.float64), values=np.unique(pyr[level]),
-                    w_first=centre_weights(k, use_parent, centre=False),
-                    w_again=centre_weights(k, use_parent, centre=True),
+                    w_first=centre_weights(k, use_parent, centre=False, causal=params.causal),
+                    w_again=centre_weights(k, use_parent, centre=True, causal=params.causal),
                     histogram=LevelHistogram(pyr[0], pyr[level], vol) if params.method == "kopf" else None)
         update = UPDATES[params.method]
         colour, n_sets = colour_sets(shapes[level], k // 2)

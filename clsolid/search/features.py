@@ -14,7 +14,7 @@ import numpy as np
 
 from ..core.views import VIEW_AXES
 from ..errors import InputError
-from .match import square_offsets
+from .match import causal_weights, square_offsets
 
 PARENT_SIDE = 3
 
@@ -23,11 +23,16 @@ def feature_size(k: int, parent: bool) -> int:
     return k * k + (PARENT_SIDE**2 if parent else 0)
 
 
-def centre_weights(k: int, parent: bool, centre: bool) -> np.ndarray:
-    """Weights of the squared distance: 1 on every term, the centre's 0 unless *centre*."""
+def centre_weights(k: int, parent: bool, centre: bool, causal: bool = False) -> np.ndarray:
+    """Weights of the squared distance: 1 on every term, the centre's 0 unless *centre*;
+    with *causal*, the k x k square's terms are the L-shaped causal neighbourhood's
+    (:func:`~clsolid.search.match.causal_weights`: the centre and what follows it are 0),
+    and the parent square stays whole."""
     w = np.ones(feature_size(k, parent), np.float32)
     if not centre:
         w[k * k // 2] = 0.0
+    if causal:
+        w[: k * k] = causal_weights(k)
     return w
 
 

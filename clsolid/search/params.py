@@ -71,6 +71,11 @@ class SearchParams:
         set), or one voxel at a time along a raster, a seeded random permutation (drawn
         anew every pass), or the 3D Morton or Hilbert curve (thesis App. B; one search per
         voxel and view, so for small blocks).
+    causal : bool
+        Match the L-shaped causal neighbourhood (the rows above the centre and the centre
+        row's left half, in each view's plane) instead of the full square (thesis_spec
+        §1.2); the parent 3 x 3 stays whole. Meant for a raster ``order``, where it is what
+        has already been visited; default False (full squares).
     """
 
     method: str = "wl"
@@ -83,6 +88,7 @@ class SearchParams:
     init: str = "upsample"
     rule: str = "centres"
     order: str = "sets"
+    causal: bool = False
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -104,6 +110,10 @@ class SearchParams:
         if self.order != "sets" and self.rule == "overlap":
             raise InputError("rule='overlap' matches and updates the whole block at once: it has no visiting "
                              "order (use order='sets')")
+        if not isinstance(self.causal, bool):
+            raise InputError(f"causal={self.causal!r} must be True or False")
+        if self.causal and self.rule == "overlap":
+            raise InputError("causal=True: Kopf's overlap rule needs every square whole (use rule='centres')")
         if not isinstance(self.parent, bool):
             raise InputError(f"parent={self.parent!r} must be True or False")
 

@@ -1,0 +1,82 @@
+"""Checkpoint folders: a run's arrays and description, written so that a crash never leaves
+a half-written checkpoint behind.
+
+A checkpoint is a folder holding ``state.npz`` (the arrays) and ``checkpoint.json`` (what
+the run is, and the SHA-256 of ``state.npz``). Both are written to temporary names and
+renamed into place, the description last, so the folder always holds the last complete
+checkpoint: a run stopped at any moment (Ctrl-C, a crash, a lost machine) can be resumed
+from it. Reading checks the format and the digest and says plainly what is wrong.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+
+#: Version of the folder's layout; a checkpoint of another version is refused.
+FORMAT = 1
+STATE = "state.npz"
+META = "checkpoint.json"
+
+
+class CheckpointError(InputError):
+    """A checkpoint folder that is missing, corrupt, or not for this run."""
+
+
+def _digest(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def write_checkpoint(folder: str | os.PathLike, meta: dict[str, Any], arrays: dict[str, np.ndarray]) -> Path:
+    """Write *arrays* and the JSON-able *meta* into *folder* (created), replacing what was there."""
+    d = Path(folder)
+    d.mkdir(parents=True, exist_ok=True)
+    tmp_state, tmp_meta = d / (STATE + ".tmp"), d / (META + ".tmp")
+    with open(tmp_state, "wb") as f:
+        np.savez(f, **arrays)
+    full = {**meta, "format": FORMAT, "state_sha256": _digest(tmp_state)}
+    tmp_meta.write_text(json.dumps(full, indent=1))
+    os.replace(tmp_state, d / STATE)
+    os.replace(tmp_meta, d / META)
+    return d
+
+
+def read_checkpoint(folder: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """The meta and arrays of a checkpoint folder.
+
+    Raises
+    ------
+    CheckpointError
+        No checkpoint there, another format, or arrays that do not match their digest.
+    """
+    d = Path(folder)
+    if not (d / META).is_file() or not (d / STATE).is_file():
+        raise CheckpointError(f"{d} holds no checkpoint (no {META} and {STATE}); start the run with "
+                              "checkpoint= (--checkpoint) to make one")
+    try:
+        meta = json.loads((d / META).read_text())
+    except (OSError, ValueError) as exc:
+        raise CheckpointError(f"{d / META} is not readable JSON ({exc}): the checkpoint is corrupt") from None
+    if meta.get("format") != FORMAT:
+        raise CheckpointError(f"{d} is a checkpoint of format {meta.get('format')!r}; this clsolid reads "
+                              f"format {FORMAT}")
+    if _digest(d / STATE) != meta.get("state_sha256"):
+        raise CheckpointError(f"{d / STATE} does not match the digest in {META}: the checkpoint is corrupt "
+                              "(it was changed or only partly copied)")
+    try:
+        with np.load(d / STATE, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+    except (OSError, ValueError) as exc:
+        raise CheckpointError(f"{d / STATE} cannot be read ({exc}): the checkpoint is corrupt") from None
+    return meta, arrays

@@ -1,0 +1,111 @@
+"""Checkpoint and resume (issue 12, point 3): a resumed run gives the identical volume, and a
+bad checkpoint gets a clear error, never a silent restart."""
+
+import json
+
+import numpy as np
+import pytest
+
+import clsolid
+from clsolid.cli import EXIT_USAGE, main
+from clsolid.core.checkpoint import META, STATE, CheckpointError, read_checkpoint, write_checkpoint
+
+KW = dict(neighborhood=5, scales=2, rng=4)
+SHAPE = (12, 12, 12)
+
+
+class Stop(Exception):
+    pass
+
+
+def _interrupted(tmp_path, device, after: int, **kw) -> tuple[np.ndarray, object]:
+    """Run with checkpoints and stop it in the progress hook after *after* sweeps."""
+    seen = []
+
+    def stop(info):
+        seen.append(info.sweep)
+        if len(seen) == after:
+            raise Stop
+
+    with pytest.raises(Stop):
+        clsolid.synthesize("gravel", SHAPE, checkpoint=tmp_path / "ck", progress=stop, device=device, **KW, **kw)
+    return tmp_path / "ck"
+
+
+@pytest.mark.parametrize("after", [1, 3, 6])
+def test_resumed_run_is_identical_to_the_uninterrupted_one(tmp_path, device, after):
+    whole = clsolid.synthesize("gravel", SHAPE, device=device, **KW)
+    folder = _interrupted(tmp_path, device, after)
+    meta = json.loads((folder / META).read_text())
+    assert meta["seed"] == 4 and sum(len(s["temperatures"]) for s in meta["timings"]["scales"]) == after
+    res = clsolid.resume(folder, device=device, full_output=True)
+    np.testing.assert_array_equal(res.volume, whole)
+    assert res.seed == 4 and res.params["neighborhood"] == 5
+    done = json.loads((folder / META).read_text())["timings"]["scales"]
+    assert len(done) == 2 and len(res.timings["scales"]) == 2  # it went on checkpointing to the end
+    np.testing.assert_array_equal(clsolid.resume(folder, device=device), whole)  # a finished run: its volume
+
+
+@pytest.mark.parametrize("relaxation", ["icm", "annealing"])
+def test_every_relaxation_resumes_identically(tmp_path, device, relaxation):
+    whole = clsolid.synthesize("gravel", SHAPE, device=device, relaxation=relaxation, **KW)
+    folder = _interrupted(tmp_path, device, 2, relaxation=relaxation)
+    np.testing.assert_array_equal(clsolid.resume(folder, device=device), whole)
+
+
+def test_reference_back_end_resumes_identically(tmp_path):
+    kw = dict(KW, scales=1, max_sweeps=3)
+    whole = clsolid.synthesize("gravel", (6, 6, 6), device="reference", **kw)
+    seen = []
+
+    def stop(info):
+        seen.append(1)
+        if len(seen) == 1:
+            raise Stop
+
+    with pytest.raises(Stop):
+        clsolid.synthesize("gravel", (6, 6, 6), device="reference", checkpoint=tmp_path, progress=stop, **kw)
+    np.testing.assert_array_equal(clsolid.resume(tmp_path, device="reference"), whole)
+
+
+def test_bad_checkpoints_are_refused(tmp_path, device):
+    with pytest.raises(CheckpointError, match="holds no checkpoint"):
+        clsolid.resume(tmp_path / "nothing")
+    folder = _interrupted(tmp_path, device, 1)
+    data = bytearray((folder / STATE).read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    (folder / STATE).write_bytes(bytes(data))
+    with pytest.raises(CheckpointError, match="corrupt"):
+        clsolid.resume(folder)
+    write_checkpoint(tmp_path / "other", {"method": "kopf"}, {"a": np.zeros(2)})
+    with pytest.raises(CheckpointError, match="only 'ml'"):
+        clsolid.resume(tmp_path / "other")
+    meta = json.loads((tmp_path / "other" / META).read_text())
+    (tmp_path / "other" / META).write_text(json.dumps({**meta, "format": 99}))
+    with pytest.raises(CheckpointError, match="format 99"):
+        read_checkpoint(tmp_path / "other")
+    with pytest.raises(CheckpointError, match="checkpoint_every"):
+        clsolid.synthesize("gravel", (8, 8, 8), checkpoint=tmp_path / "x", checkpoint_every=-1, device=device)
+    assert isinstance(CheckpointError("x"), clsolid.InputError)
+
+
+def test_cli_checkpoint_and_resume(tmp_path, device):
+    args = ["--shape", "12", "12", "12", "--neighborhood", "5", "--scales", "2", "--seed", "4", "-q"]
+    assert main(["synth", "gravel", "-o", str(tmp_path / "a.npy"), *args, "--checkpoint", str(tmp_path / "ck")]) == 0
+    assert (tmp_path / "ck" / META).is_file()
+    assert main(["synth", "-o", str(tmp_path / "b.npy"), "--resume", str(tmp_path / "ck"), "-q"]) == 0
+    np.testing.assert_array_equal(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
+    meta = json.loads((tmp_path / "b.json").read_text())
+    assert meta["seed"] == 4 and meta["resumed_from"] == str(tmp_path / "ck")
+    assert main(["synth", "-o", str(tmp_path / "c.npy"), "--resume", str(tmp_path / "ck"), "--seed", "5"]) == EXIT_USAGE
+
+
+def test_cli_ctrl_c_names_the_checkpoint(tmp_path, capsys, monkeypatch, device):
+    import clsolid.api
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(clsolid.api, "synthesize", interrupted)
+    assert main(["synth", "gravel", "-o", str(tmp_path / "a.npy"), "--checkpoint", str(tmp_path / "ck")]) == 130
+    assert f"--resume {tmp_path / 'ck'}" in capsys.readouterr().err
