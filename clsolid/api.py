@@ -18,7 +18,7 @@ METHODS = ("ml", "wl", "kopf")
 OUTPUTS = ("values", "labels")
 PLANNED_METHODS = ("chen-wang",)
 #: Options of the search methods (clsolid.search.params.SearchParams).
-_SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order", "causal")
+_SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order", "causal", "histogram")
 #: Options of the search methods that are not parameters of the method (what to report).
 _SEARCH_REPORTS = ("site_map",)
 #: The neighbourhood side each method uses when none is given (ML: the thesis case; WL: ch5_np_common).
@@ -111,7 +111,9 @@ def synthesize(
         square proposes a value), ``order`` (``"sets"``, default: conflict-free sets in
         parallel; ``"lexicographic"``, ``"random"``, ``"morton"`` or ``"hilbert"``: one voxel
         at a time, for small blocks), ``causal`` (the L-shaped neighbourhood instead of the
-        full square; default False), and ``site_map=True`` (with ``full_output``) adds the position
+        full square; default False), for ``kopf`` ``histogram`` (``"global"``, default, or
+        ``"slice"``: the re-weighting against the histogram of the voxel's slice), and
+        ``site_map=True`` (with ``full_output``) adds the position
         histogram, ``SynthesisResult.site_use``; they return float64 volumes of exemplar values or their means, and
         ``output="labels"`` is refused. The ML-only arguments and options (``heuristic``,
         ``relaxation`` ...) are refused with it, and the other way round.

@@ -19,7 +19,7 @@ from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildErro
 from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, RELAXATIONS, SLICE_LAYOUTS,
                      UPSAMPLING, MLParams)
 from .presets import PRESETS, Preset, get_preset
-from .search.params import ORDERS_ALL, RULES
+from .search.params import HISTOGRAMS, ORDERS_ALL, RULES
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
 _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
@@ -74,6 +74,8 @@ def _add_synth(sub) -> None:
     p.add_argument("--order", choices=ORDERS_ALL, default="sets",
                    help="wl/kopf: conflict-free sets in parallel (default), or one voxel at a time in raster, "
                         "random, Morton or Hilbert order (small blocks)")
+    p.add_argument("--histogram", choices=HISTOGRAMS, default="global",
+                   help="kopf: re-weight by the whole block's histogram (default) or by the voxel's slice's")
     p.add_argument("--causal", action="store_true",
                    help="wl/kopf: match the L-shaped causal neighbourhood instead of the full square")
     p.add_argument("--site-map", type=Path, default=None,
@@ -241,7 +243,7 @@ def _tracker(levels: int, records: list):
 _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited",
             "insert_slices", "insert_spacing", "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "indices", "track")
-_WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "site_map")
+_WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram", "site_map")
 
 
 #: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
@@ -308,8 +310,9 @@ def cmd_synth(args) -> int:
         options = dict(iterations=args.iterations, inner=args.inner, parent=not args.no_parent,
                        init=args.init, order=args.order, causal=args.causal,
                        builtin_size=args.builtin_size)
-        if args.rule != "centres":  # kopf's alone: SearchParams refuses it for wl
-            options["rule"] = args.rule
+        for name, plain in (("rule", "centres"), ("histogram", "global")):  # kopf's alone: wl refuses them
+            if getattr(args, name) != plain:
+                options[name] = getattr(args, name)
         if args.site_map is not None:
             if args.site_map.suffix.lower() != ".png":
                 raise InputError(f"--site-map {args.site_map} must end in .png")

@@ -197,3 +197,33 @@ def test_cli_writes_the_site_map(tmp_path, device):
     assert main(["synth", "brick", "-o", str(out), "--method", "kopf", "--shape", "8", "8", "8", "--scales", "1",
                  "--neighborhood", "5", "--iterations", "1", "--site-map", str(tmp_path / "map.png"), "-q"]) == 0
     assert (tmp_path / "map.png").stat().st_size > 100
+
+
+def test_per_slice_histograms_follow_changes():
+    finest = np.array([[0.0, 255.0]])
+    vol = np.array([0.0, 255.0, 255.0, 0.0, 0.0, 0.0, 255.0, 0.0]).reshape(2, 2, 2)
+    h = LevelHistogram(finest, finest, vol, ("front", "right"))
+
+    def direct(view):
+        axis = {"front": 0, "right": 2}[view]
+        return np.stack([[np.sum(np.take(vol, d, axis=axis) == v) for v in (0.0, 255.0)] for d in range(2)])
+
+    for view in ("front", "right"):
+        np.testing.assert_array_equal(h.slices[view], direct(view))
+    flat = vol.reshape(-1)
+    voxels = np.array([1, 4])
+    old, flat[voxels] = flat[voxels].copy(), [0.0, 255.0]
+    h.replace(old, flat[voxels], voxels)
+    for view in ("front", "right"):
+        np.testing.assert_array_equal(h.slices[view], direct(view))
+    np.testing.assert_allclose(h.slice_fractions("front", np.array([0, 7])), direct("front") / 4)
+
+
+def test_slice_histogram_option_runs_and_is_kopfs(device):
+    ex = gallery_exemplar("porous80", 64)
+    kw = dict(method="kopf", scales=2, iterations=2, rng=1, device=device)
+    a = clsolid.synthesize(ex, (12, 12, 12), histogram="slice", **kw)
+    b = clsolid.synthesize(ex, (12, 12, 12), **kw)
+    assert set(np.unique(a)) <= {0.0, 255.0} and not np.array_equal(a, b)
+    with pytest.raises(clsolid.InputError, match="histogram"):
+        clsolid.synthesize(ex, (8, 8, 8), method="wl", histogram="slice")

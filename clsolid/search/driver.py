@@ -70,7 +70,9 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
                     patches=table[:, : k * k].astype(np.float64), values=np.unique(pyr[level]),
                     w_first=centre_weights(k, use_parent, centre=False, causal=params.causal),
                     w_again=centre_weights(k, use_parent, centre=True, causal=params.causal),
-                    histogram=LevelHistogram(pyr[0], pyr[level], vol) if params.method == "kopf" else None)
+                    histogram=LevelHistogram(pyr[0], pyr[level], vol,
+                                             params.view_names if params.histogram == "slice" else ())
+                    if params.method == "kopf" else None)
         update = UPDATES[params.method]
         colour, n_sets = colour_sets(shapes[level], k // 2)
         sets = split_by_colour(np.ones(shapes[level], bool), colour, n_sets)

@@ -48,11 +48,20 @@ def robust_weights(ssd: np.ndarray, span: float) -> np.ndarray:
     return (np.sqrt(np.maximum(ssd, 0.0)) + EPS_REL * span) ** (R - 2.0)
 
 
-def histogram_factor(level: Level, values: np.ndarray) -> np.ndarray:
-    """``1 / (1 + s * max(0, H_solid(g) - H_exemplar(g)))`` for each proposed value's bin g."""
+def histogram_factor(level: Level, values: np.ndarray, view: str | None = None,
+                     voxels: np.ndarray | None = None) -> np.ndarray:
+    """``1 / (1 + s * max(0, H_solid(g) - H_exemplar(g)))`` for each proposed value's bin g.
+
+    H_solid is the whole block's histogram, or with ``histogram="slice"`` that of the slice
+    of *view* holding each of *voxels* (one per value).
+    """
     hist = level.histogram
     g = hist.bin(values).reshape(values.shape)
-    return 1.0 / (1.0 + hist.values.size * np.maximum(0.0, hist.volume[g] - hist.exemplar[g]))
+    if level.params.histogram == "slice":
+        solid = np.take_along_axis(hist.slice_fractions(view, voxels), g.reshape(-1, 1), axis=1).reshape(g.shape)
+    else:
+        solid = hist.volume[g]
+    return 1.0 / (1.0 + hist.values.size * np.maximum(0.0, solid - hist.exemplar[g]))
 
 
 def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray) -> int:
@@ -60,7 +69,9 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
     hist = level.histogram
     sites, ssd = matches(level, vol, coarse, voxels, level.w_first)
     values = level.centres[sites]  # (views, m)
-    w = robust_weights(ssd, float(hist.values[-1] - hist.values[0]) or 1.0) * histogram_factor(level, values)
+    factor = np.stack([histogram_factor(level, values[i], view, voxels)
+                       for i, view in enumerate(level.params.view_names)])
+    w = robust_weights(ssd, float(hist.values[-1] - hist.values[0]) or 1.0) * factor
     flat = vol.reshape(-1)
     old = flat[voxels].copy()
     if hist.values.size <= MAX_PHASES:
@@ -68,7 +79,7 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
     else:
         new = (w * values).sum(axis=0) / w.sum(axis=0)
     flat[voxels] = new
-    hist.replace(old, new)
+    hist.replace(old, new, voxels)
     return sites.size
 
 
@@ -87,7 +98,7 @@ def overlap_pass(level: Level, vol: np.ndarray, coarse: np.ndarray | None) -> in
         vol[...] = num[0] / den
     else:
         vol[...] = phases[vote_balanced(num.reshape(phases.size, -1), level.histogram.exemplar).reshape(vol.shape)]
-    level.histogram.replace(old, vol.ravel())
+    level.histogram.replace(old, vol.ravel(), np.arange(vol.size))
     return searches
 
 
@@ -103,7 +114,8 @@ def overlap_support(level: Level, vol: np.ndarray,
     finest level of a categorical exemplar), ``num[i]`` the weight proposing ``phases[i]``.
     """
     k = level.params.neighborhood
-    sites, ssd = matches(level, vol, coarse, np.arange(vol.size), level.w_first)  # (views, n)
+    every = np.arange(vol.size)
+    sites, ssd = matches(level, vol, coarse, every, level.w_first)  # (views, n)
     hist = level.histogram
     w = robust_weights(ssd, float(hist.values[-1] - hist.values[0]) or 1.0)
     # Coarser levels of a categorical exemplar's pyramid are blends: they take the mean.
@@ -114,7 +126,7 @@ def overlap_support(level: Level, vol: np.ndarray,
         axes = VIEW_AXES[view]
         for j, shift in enumerate(square_offsets(k)):
             proposed = level.patches[sites[i], j]  # what u's match says of u + offset_j
-            weight = (w[i] * histogram_factor(level, proposed)).reshape(vol.shape)
+            weight = (w[i] * histogram_factor(level, proposed, view, every)).reshape(vol.shape)
             proposed = proposed.reshape(vol.shape)
             den += np.roll(weight, tuple(shift), axis=axes)
             if phases is None:

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from ..core.views import DEPTH_AXIS
 from ..exemplar import nearest_level_index
 from .params import SearchParams
 
@@ -14,28 +15,54 @@ from .params import SearchParams
 class LevelHistogram:
     """Grey-level histograms of the exemplar and of the block at one level, on the finest
     exemplar's own values as bins (each value counts for the nearest), kept up to date as
-    voxels change (``kopf``'s re-weighting, thesis_spec §1.6.2)."""
+    voxels change (``kopf``'s re-weighting, thesis_spec §1.6.2).
 
-    def __init__(self, finest: np.ndarray, exemplar: np.ndarray, volume: np.ndarray) -> None:
+    With *views*, the block's histogram is also kept per slice of each of those views
+    (``histogram="slice"``): :meth:`slice_fractions` gives, for voxels, the histogram of
+    their own slice in a view.
+    """
+
+    def __init__(self, finest: np.ndarray, exemplar: np.ndarray, volume: np.ndarray,
+                 views: tuple[str, ...] = ()) -> None:
         self.values = np.unique(finest)
         n = self.values.size
         self.exemplar = np.bincount(self.bin(exemplar), minlength=n) / exemplar.size
         self.counts = np.bincount(self.bin(volume), minlength=n).astype(np.int64)
         self.total = volume.size
+        self.shape = volume.shape
+        self.slices = {}
+        for view in views:  # counts[depth, bin] of every slice of the view
+            depth = self._depth(view, np.arange(volume.size))
+            self.slices[view] = np.zeros((volume.shape[DEPTH_AXIS[view]], n), np.int64)
+            np.add.at(self.slices[view], (depth, self.bin(volume.ravel())), 1)
 
     def bin(self, values: np.ndarray) -> np.ndarray:
         """The bin of each value (the nearest of the finest exemplar's values)."""
         return nearest_level_index(values, self.values)
+
+    def _depth(self, view: str, voxels: np.ndarray) -> np.ndarray:
+        return np.unravel_index(voxels, self.shape)[DEPTH_AXIS[view]]
 
     @property
     def volume(self) -> np.ndarray:
         """The block's histogram, as fractions."""
         return self.counts / self.total
 
-    def replace(self, old: np.ndarray, new: np.ndarray) -> None:
-        """Voxels whose values went from *old* to *new*."""
+    def slice_fractions(self, view: str, voxels: np.ndarray) -> np.ndarray:
+        """``(len(voxels), bins)``: the histogram, as fractions, of each voxel's slice in *view*."""
+        counts = self.slices[view][self._depth(view, voxels)]
+        return counts / counts.sum(axis=1, keepdims=True)
+
+    def replace(self, old: np.ndarray, new: np.ndarray, voxels: np.ndarray | None = None) -> None:
+        """Voxels (flat indices *voxels*; needed with per-slice histograms) whose values went
+        from *old* to *new*."""
         n = self.values.size
-        self.counts += np.bincount(self.bin(new), minlength=n) - np.bincount(self.bin(old), minlength=n)
+        b_old, b_new = self.bin(old), self.bin(new)
+        self.counts += np.bincount(b_new, minlength=n) - np.bincount(b_old, minlength=n)
+        for view, counts in self.slices.items():
+            depth = self._depth(view, voxels)
+            np.add.at(counts, (depth, b_old), -1)
+            np.add.at(counts, (depth, b_new), 1)
 
 
 @dataclass

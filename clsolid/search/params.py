@@ -21,6 +21,9 @@ RULES = ("centres", "overlap")
 #: "sets": conflict-free sets in parallel, in a seeded order (fast, the default); the others
 #: visit one voxel at a time in that order (clsolid.core.orders; small blocks, fidelity checks).
 ORDERS_ALL = ("sets",) + ORDERS
+#: kopf's histogram re-weighting: against the whole block's histogram, or the slice's (in the
+#: view of the match) that holds the voxel.
+HISTOGRAMS = ("global", "slice")
 
 
 def _int_in(name: str, value, lo: int, hi: int) -> int:
@@ -76,6 +79,10 @@ class SearchParams:
         row's left half, in each view's plane) instead of the full square (thesis_spec
         §1.2); the parent 3 x 3 stays whole. Meant for a raster ``order``, where it is what
         has already been visited; default False (full squares).
+    histogram : {"global", "slice"}
+        ``kopf`` only: re-weight each view's match by the whole block's grey-level
+        histogram (Kopf's, default) or by that of the view's slice holding the voxel (the
+        thesis's option).
     """
 
     method: str = "wl"
@@ -89,6 +96,7 @@ class SearchParams:
     rule: str = "centres"
     order: str = "sets"
     causal: bool = False
+    histogram: str = "global"
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -110,6 +118,10 @@ class SearchParams:
         if self.order != "sets" and self.rule == "overlap":
             raise InputError("rule='overlap' matches and updates the whole block at once: it has no visiting "
                              "order (use order='sets')")
+        if self.histogram not in HISTOGRAMS:
+            raise InputError(f"histogram={self.histogram!r} must be one of {', '.join(map(repr, HISTOGRAMS))}")
+        if self.histogram != "global" and self.method != "kopf":
+            raise InputError(f"histogram={self.histogram!r} is kopf's re-weighting; method {self.method!r} has none")
         if not isinstance(self.causal, bool):
             raise InputError(f"causal={self.causal!r} must be True or False")
         if self.causal and self.rule == "overlap":
