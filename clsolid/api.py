@@ -37,6 +37,11 @@ def is_reference(device) -> bool:
     return isinstance(device, str) and device.lower() == "reference"
 
 
+def _check_output(output) -> None:
+    if output not in OUTPUTS:
+        raise InputError(f"output={output!r} must be one of {', '.join(map(repr, OUTPUTS))}")
+
+
 def _load(exemplar, levels, rng, options: dict):
     """The exemplar image, its level map and the seed, as every method takes them."""
     from .exemplar import level_map, load_exemplar
@@ -222,8 +227,7 @@ def synthesize(
     if method not in METHODS:
         planned = f" ({', '.join(PLANNED_METHODS)} are planned, not implemented yet)" if method in PLANNED_METHODS else ""
         raise InputError(f"method={method!r} is not available{planned}; use one of {METHODS}")
-    if output not in OUTPUTS:
-        raise InputError(f"output={output!r} must be one of {', '.join(map(repr, OUTPUTS))}")
+    _check_output(output)
     valid = (_ML_OPTIONS + _BACKEND_OPTIONS + _RUN_OPTIONS if method == "ml"
              else _SEARCH_OPTIONS + _SEARCH_REPORTS) + ("builtin_size",)
     unknown = set(options) - set(valid)
@@ -243,11 +247,11 @@ def synthesize(
     backend = make_backend(device, {k: options[k] for k in _BACKEND_OPTIONS if k in options})
     hook = None
     if options.get("checkpoint") is not None:
-        from .ml.checkpoints import check_every, checkpointer
+        from .ml.checkpoints import Checkpointer, check_every
 
         meta = {"method": method, "params": params.to_dict(), "shape": list(shape), "seed": seed,
                 "device": backend.name}
-        hook = checkpointer(options["checkpoint"], check_every(options.get("checkpoint_every", 0.0)), meta, image)
+        hook = Checkpointer(options["checkpoint"], check_every(options.get("checkpoint_every", 0.0)), meta, image)
     log.info("synthesising %s from a %s exemplar on %s, seed %d", shape, image.shape, backend.name, seed)
     return _run_ml(levels_of, shape, params, seed, backend, progress, output, full_output, hook, None)
 
@@ -294,11 +298,10 @@ def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | N
     """
     from .core.checkpoint import CheckpointError
     from .exemplar import level_map
-    from .ml.checkpoints import check_every, checkpointer, load_run
+    from .ml.checkpoints import Checkpointer, check_every, load_run
     from .ml.model import scale_shape
 
-    if output not in OUTPUTS:
-        raise InputError(f"output={output!r} must be one of {', '.join(map(repr, OUTPUTS))}")
+    _check_output(output)
     meta, params, image, state = load_run(checkpoint)
     shape = check_shape(tuple(meta["shape"]))
     levels_of = level_map(image, params.levels)
@@ -311,9 +314,8 @@ def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | N
     if backend.name != meta.get("device"):
         log.warning("resuming on %s a run begun on %s: the volume will differ from the uninterrupted one",
                     backend.name, meta.get("device"))
-    hook = checkpointer(checkpoint, check_every(checkpoint_every), {k: v for k, v in meta.items()
-                                                                    if k not in ("timings", "format", "state_sha256")},
-                        image)
+    run_meta = {k: v for k, v in meta.items() if k != "timings"}  # the Checkpointer adds each sweep's
+    hook = Checkpointer(checkpoint, check_every(checkpoint_every), run_meta, image)
     log.info("resuming %s at scale %d, after sweep %d", checkpoint, state.scale + 1, state.sweep)
     return _run_ml(levels_of, shape, params, int(meta["seed"]), backend, progress, output, full_output, hook, state)
 
@@ -330,6 +332,11 @@ def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, lev
                          "use output='values'")
     params = SearchParams(method=method, neighborhood=neighborhood, scales=scales, views=views,
                           **{k: options[k] for k in _SEARCH_OPTIONS if k in options})
+    site_map = options.get("site_map", False)
+    if not isinstance(site_map, bool):
+        raise InputError(f"site_map={site_map!r} must be True or False")
+    if site_map and not full_output:
+        raise InputError("site_map=True needs full_output=True (the map is SynthesisResult.site_use)")
     image, levels_of, seed = _load(exemplar, levels, rng, options)
     grey = levels_of.to_values(levels_of.labels).astype(np.float64)
     if is_reference(device):
@@ -340,16 +347,10 @@ def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, lev
         dev = select_device(device)
         name, make_matcher = dev.name, (lambda table: CLMatcher(dev, table))
     log.info("synthesising %s from a %s exemplar with %s on %s, seed %d", shape, image.shape, method, name, seed)
-    site_map = options.get("site_map", False)
-    if not isinstance(site_map, bool):
-        raise InputError(f"site_map={site_map!r} must be True or False")
-    if site_map and not full_output:
-        raise InputError("site_map=True needs full_output=True (the map is SynthesisResult.site_use)")
-    vol, timings = run_search(grey, shape, params, seed, make_matcher, progress, count_sites=site_map)
+    vol, timings, use = run_search(grey, shape, params, seed, make_matcher, progress, count_sites=site_map)
     if not full_output:
         return vol
     effective = {**params.to_dict(), "levels": levels, "shape": list(shape)}
-    use = timings.pop("site_use", None)  # an array: not a timing, and not JSON
     return SynthesisResult(volume=vol, labels=None, exemplar=grey, exemplar_labels=levels_of.labels,
                            level_values=levels_of.values, values_exact=levels_of.exact, seed=seed,
                            params=effective, device=name, timings=timings, site_use=use)

@@ -252,20 +252,23 @@ _RESUME_FIXED = ("exemplar", "shape", "method", "preset", "heuristic", "neighbor
                      n for n in _ML_ONLY if n not in ("indices", "track"))
 
 
+def _given(args, names) -> str:
+    """Those of *names* set away from the synth defaults, as the user wrote them ('' if none)."""
+    given = [name for name in names if getattr(args, name) != SYNTH_DEFAULTS[name]]
+    return ", ".join(name if name == "exemplar" else "--" + name.replace("_", "-") for name in given)
+
+
 def _check_resume_flags(args) -> None:
-    given = [name for name in _RESUME_FIXED if getattr(args, name) != SYNTH_DEFAULTS[name]]
-    if given:
-        flags = ", ".join(name if name == "exemplar" else "--" + name.replace("_", "-") for name in given)
+    flags = _given(args, _RESUME_FIXED)
+    if flags:
         raise InputError(f"--resume goes on with the checkpoint's own exemplar, settings and seed (and "
                          f"checkpoints there): drop {flags}")
 
 
 def _check_method_flags(args) -> None:
     """Refuse a flag the chosen method would not read (set away from its default)."""
-    other = _WL_ONLY if args.method == "ml" else _ML_ONLY
-    given = [name for name in other if getattr(args, name) != SYNTH_DEFAULTS[name]]
-    if given:
-        flags = ", ".join("--" + name.replace("_", "-") for name in given)
+    flags = _given(args, _WL_ONLY if args.method == "ml" else _ML_ONLY)
+    if flags:
         raise InputError(f"{flags} not used by --method {args.method}")
 
 
@@ -308,11 +311,8 @@ def cmd_synth(args) -> int:
         raise InputError(f"--checkpoint is for --method ml; {args.method} runs are not checkpointed yet")
     if args.method != "ml":
         options = dict(iterations=args.iterations, inner=args.inner, parent=not args.no_parent,
-                       init=args.init, order=args.order, causal=args.causal,
-                       builtin_size=args.builtin_size)
-        for name, plain in (("rule", "centres"), ("histogram", "global")):  # kopf's alone: wl refuses them
-            if getattr(args, name) != plain:
-                options[name] = getattr(args, name)
+                       init=args.init, rule=args.rule, order=args.order, causal=args.causal,
+                       histogram=args.histogram, builtin_size=args.builtin_size)
         if args.site_map is not None:
             if args.site_map.suffix.lower() != ".png":
                 raise InputError(f"--site-map {args.site_map} must end in .png")

@@ -83,7 +83,7 @@ def _slow_support(level, vol, coarse):
                 ra, ca = VIEW_AXES[view]
                 v[ra], v[ca] = (v[ra] + dr) % vol.shape[ra], (v[ca] + dc) % vol.shape[ca]
                 value = level.patches[sites[i, u], j]
-                weight = w[i, u] * histogram_factor(level, np.array([value]))[0]
+                weight = w[i, u] * histogram_factor(level, hist.bin(np.array([value])))[0]
                 den[tuple(v)] += weight
                 if phases is None:
                     num[(0, *v)] += weight * value

@@ -53,7 +53,7 @@ def write_checkpoint(folder: str | os.PathLike, meta: dict[str, Any], arrays: di
 
 
 def read_checkpoint(folder: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    """The meta and arrays of a checkpoint folder.
+    """The meta (as given to :func:`write_checkpoint`) and arrays of a checkpoint folder.
 
     Raises
     ------
@@ -79,4 +79,4 @@ def read_checkpoint(folder: str | os.PathLike) -> tuple[dict[str, Any], dict[str
             arrays = {k: z[k] for k in z.files}
     except (OSError, ValueError) as exc:
         raise CheckpointError(f"{d / STATE} cannot be read ({exc}): the checkpoint is corrupt") from None
-    return meta, arrays
+    return {k: v for k, v in meta.items() if k not in ("format", "state_sha256")}, arrays

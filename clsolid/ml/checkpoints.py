@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import os
 import time
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -15,21 +15,25 @@ from .driver import RunState
 from .params import MLParams
 
 
-def checkpointer(folder: str | os.PathLike, every_s: float, meta: dict[str, Any],
-                 exemplar: np.ndarray) -> Callable[[RunState], None]:
-    """A ``checkpoint`` hook for :func:`~clsolid.ml.driver.run_ml` that writes *folder* after
-    a sweep when *every_s* seconds have passed since the last write (0: every sweep), and
-    always after the sweep that ends a scale. The exemplar as loaded goes in too, so a
-    resumed run needs nothing else."""
-    last = [-np.inf]
+class Checkpointer:
+    """The ``checkpoint`` of :func:`~clsolid.ml.driver.run_ml`: writes *folder* after a sweep
+    when *every_s* seconds have passed since the last write (0: every sweep), and always
+    after the sweep that ends a scale. :meth:`due` says so before the state is gathered,
+    so a sweep that writes nothing reads nothing back from the device. The exemplar as
+    loaded goes in too, so a resumed run needs nothing else."""
 
-    def save(state: RunState) -> None:
-        now = time.monotonic()
-        if state.done or now - last[0] >= every_s:
-            write_checkpoint(folder, {**meta, "timings": state.timings}, {**state.arrays(), "exemplar": exemplar})
-            last[0] = now
+    def __init__(self, folder: str | os.PathLike, every_s: float, meta: dict[str, Any],
+                 exemplar: np.ndarray) -> None:
+        self.folder, self.every_s, self.meta, self.exemplar = folder, every_s, meta, exemplar
+        self.last = -np.inf
 
-    return save
+    def due(self, scale_done: bool) -> bool:
+        return scale_done or time.monotonic() - self.last >= self.every_s
+
+    def save(self, state: RunState) -> None:
+        write_checkpoint(self.folder, {**self.meta, "timings": state.timings},
+                         {**state.arrays(), "exemplar": self.exemplar})
+        self.last = time.monotonic()
 
 
 def check_every(value: Any) -> float:

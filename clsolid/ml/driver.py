@@ -147,11 +147,11 @@ class Balance:
     to sweep by several points).
     """
 
-    def __init__(self, model: ScaleModel, beta: float, volume: np.ndarray) -> None:
+    def __init__(self, model: ScaleModel, beta: float, volume: np.ndarray, bias: np.ndarray) -> None:
         self.model, self.beta = model, beta
         self.pi = label_fractions(model.exemplar, model.labels)
         self.stride = score_stride(model.shape)
-        self.bias = np.zeros(model.labels.size)  # a coarser scale's labels mean other grey levels: start afresh
+        self.bias = bias  # zeros at a scale's start (a coarser scale's labels mean other grey levels)
         self.index = nearest_level_index(volume, model.labels)  # each voxel's label, kept up to date
 
     def after(self, backend: Any, updated: np.ndarray, pending: np.ndarray) -> np.ndarray:
@@ -250,7 +250,7 @@ def run_ml(
     seed: int,
     backend: Any,
     progress: Callable[[SweepInfo], None] | None = None,
-    checkpoint: Callable[[RunState], None] | None = None,
+    checkpoint: Any = None,
     resume: RunState | None = None,
 ) -> tuple[np.ndarray, dict, list[float]]:
     """Run the multi-scale relaxation on quantised exemplar labels with a back end.
@@ -262,7 +262,8 @@ def run_ml(
     the global temperature t_in starts each scale at ``anneal_start`` and is multiplied by
     ``anneal_cooling`` after each sweep, and the stop rule applies to it.
 
-    *checkpoint*, if given, receives a :class:`RunState` after every sweep; *resume*
+    *checkpoint*, if given (a :class:`clsolid.ml.checkpoints.Checkpointer`), is asked after
+    every sweep whether it is ``due`` and then given the :class:`RunState`; *resume*
     continues from one (its volume, temperatures and bias restored on the back end), and
     gives the same volume as the run that was never stopped.
 
@@ -292,6 +293,7 @@ def run_ml(
             r = resume
             vol, temp, inherited = r.volume.reshape(model.shape), r.temperature.reshape(model.shape), r.inherited
             t_init, target, t_now, first = r.t_init, r.target, r.t_now, r.sweep + 1
+            bias = np.array(r.bias, dtype=np.float64)
             record = timings["scales"].pop()
         else:
             vol, temp = start_state(model, base, coarse, params, seed)
@@ -301,16 +303,12 @@ def run_ml(
             t_init = params.anneal_start if annealing else float(temp.sum())
             target = 0.0 if params.sweeps else (1.0 - params.stop_fraction) * t_init
             t_now = t_init
+            bias = np.zeros(model.labels.size)
             record = {"level": model.level, "shape": list(model.shape), "bandwidth": model.bandwidth,
                       "n_sites": model.n_sites, "n_sets": model.n_sets, "initial_temperature": t_init,
                       "temperatures": [], "visited": [], "sweep_seconds": []}
         backend.start_scale(model, vol, temp, params)
-        balance = Balance(model, params.balance, vol) if params.balance else None
-        bias = np.zeros(model.labels.size)
-        if resume is not None and i == resume.scale:
-            bias = np.array(resume.bias, dtype=np.float64)
-            if balance is not None:
-                balance.bias = bias
+        balance = Balance(model, params.balance, vol, bias) if params.balance else None
         for sweep in range(first, n_sweeps + 1):
             t_sweep = time.perf_counter()
             if annealing:
@@ -341,11 +339,11 @@ def run_ml(
             else:
                 done = t_now <= target or t_now == 0.0 or sweep == n_sweeps
             log.debug("scale %d sweep %d: T=%.1f visited=%d %.2fs", i + 1, sweep, t_now, visited, sweep_s)
-            if checkpoint is not None:  # before progress, so that a Ctrl-C there keeps this sweep
-                checkpoint(RunState(i, sweep, done, np.array(backend.volume(), copy=True),
-                                    np.array(backend.temperature(), copy=True), inherited.copy(), t_init, target,
-                                    t_now, np.array(bias, dtype=np.float64),
-                                    {"scales": timings["scales"] + [record]}))
+            if checkpoint is not None and checkpoint.due(done):  # before progress: a Ctrl-C there keeps it
+                checkpoint.save(RunState(i, sweep, done, np.array(backend.volume(), copy=True),
+                                         np.array(backend.temperature(), copy=True), inherited.copy(), t_init,
+                                         target, t_now, np.array(bias, dtype=np.float64),
+                                         {"scales": timings["scales"] + [record]}))
             if progress is not None:
                 eta = clock.eta(i, sweep_s, visited, model, t_now, t_prev, target,
                                 0 if done else n_sweeps - sweep)

@@ -42,15 +42,16 @@ def level_shapes(shape: tuple[int, int, int], levels: int) -> list[tuple[int, in
 def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: SearchParams, seed: int,
                make_matcher: Callable[[np.ndarray], Any],
                progress: Callable[[SweepInfo], None] | None = None,
-               count_sites: bool = False) -> tuple[np.ndarray, dict]:
+               count_sites: bool = False) -> tuple[np.ndarray, dict, np.ndarray | None]:
     """Grow a ``shape`` block from a 2D *exemplar* (float grey levels) with ``params.method``.
 
     *make_matcher(table)* returns an object with ``best(queries, weights)`` (a
     :class:`~clsolid.search.match.CLMatcher` or :class:`~clsolid.search.match.ReferenceMatcher`).
     *progress* gets a :class:`~clsolid.core.synthesis.SweepInfo` after every pass (no
-    temperatures: those fields are NaN). Returns the float64 volume and timings; with
-    *count_sites*, ``timings["site_use"]`` is the position histogram of the finished block
-    (:func:`~clsolid.search.features.site_use`: every voxel matched once more in every view).
+    temperatures: those fields are NaN). Returns the float64 volume, the timings and, with
+    *count_sites*, the position histogram of the finished block
+    (:func:`~clsolid.search.features.site_use`: every voxel matched once more in every view;
+    else None).
     """
     k = params.neighborhood
     shapes = level_shapes(shape, params.scales)
@@ -59,7 +60,7 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
     pyr = gaussian_pyramid(exemplar, params.scales)
     timings: dict = {"levels": []}
     t0 = time.perf_counter()
-    coarse = None
+    coarse, use = None, None
     for level in range(params.scales - 1, -1, -1):
         t_level = time.perf_counter()
         parent_img = pyr[level + 1] if params.parent and level + 1 < params.scales else None
@@ -96,10 +97,10 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
                                   "searches": searches, "seconds": time.perf_counter() - t_level})
         if count_sites and level == 0:
             sites = wl.matches(ctx, vol, parent, np.arange(vol.size), ctx.w_first)[0]
-            timings["site_use"] = site_use(pyr[0].shape, None if parent_img is None else parent_img.shape, k, sites)
+            use = site_use(pyr[0].shape, None if parent_img is None else parent_img.shape, k, sites)
         coarse = vol
     timings["total_s"] = time.perf_counter() - t0
-    return coarse, timings
+    return coarse, timings, use
 
 
 def _start(exemplar: np.ndarray, shape: tuple[int, int, int], coarse: np.ndarray | None, init: str,

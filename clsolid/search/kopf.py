@@ -48,20 +48,20 @@ def robust_weights(ssd: np.ndarray, span: float) -> np.ndarray:
     return (np.sqrt(np.maximum(ssd, 0.0)) + EPS_REL * span) ** (R - 2.0)
 
 
-def histogram_factor(level: Level, values: np.ndarray, view: str | None = None,
+def histogram_factor(level: Level, bins: np.ndarray, view: str | None = None,
                      voxels: np.ndarray | None = None) -> np.ndarray:
-    """``1 / (1 + s * max(0, H_solid(g) - H_exemplar(g)))`` for each proposed value's bin g.
+    """``1 / (1 + s * max(0, H_solid(g) - H_exemplar(g)))`` for each proposed value's bin g
+    (*bins*, from ``level.histogram.bin``).
 
     H_solid is the whole block's histogram, or with ``histogram="slice"`` that of the slice
-    of *view* holding each of *voxels* (one per value).
+    of *view* holding each of *voxels* (one per bin).
     """
     hist = level.histogram
-    g = hist.bin(values).reshape(values.shape)
     if level.params.histogram == "slice":
-        solid = np.take_along_axis(hist.slice_fractions(view, voxels), g.reshape(-1, 1), axis=1).reshape(g.shape)
+        solid = np.take_along_axis(hist.slice_fractions(view, voxels), bins.reshape(-1, 1), axis=1).reshape(bins.shape)
     else:
-        solid = hist.volume[g]
-    return 1.0 / (1.0 + hist.values.size * np.maximum(0.0, solid - hist.exemplar[g]))
+        solid = hist.volume[bins]
+    return 1.0 / (1.0 + hist.values.size * np.maximum(0.0, solid - hist.exemplar[bins]))
 
 
 def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray) -> int:
@@ -69,9 +69,10 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
     hist = level.histogram
     sites, ssd = matches(level, vol, coarse, voxels, level.w_first)
     values = level.centres[sites]  # (views, m)
-    factor = np.stack([histogram_factor(level, values[i], view, voxels)
+    bins = hist.bin(values).reshape(values.shape)
+    factor = np.stack([histogram_factor(level, bins[i], view, voxels)
                        for i, view in enumerate(level.params.view_names)])
-    w = robust_weights(ssd, float(hist.values[-1] - hist.values[0]) or 1.0) * factor
+    w = robust_weights(ssd, hist.span) * factor
     flat = vol.reshape(-1)
     old = flat[voxels].copy()
     if hist.values.size <= MAX_PHASES:
@@ -117,7 +118,8 @@ def overlap_support(level: Level, vol: np.ndarray,
     every = np.arange(vol.size)
     sites, ssd = matches(level, vol, coarse, every, level.w_first)  # (views, n)
     hist = level.histogram
-    w = robust_weights(ssd, float(hist.values[-1] - hist.values[0]) or 1.0)
+    w = robust_weights(ssd, hist.span)
+    patch_bins = hist.bin(level.patches).reshape(level.patches.shape)  # once a pass, not once a proposal
     # Coarser levels of a categorical exemplar's pyramid are blends: they take the mean.
     phases = level.values if level.values.size <= MAX_PHASES else None
     num = np.zeros((1 if phases is None else phases.size,) + vol.shape)
@@ -126,7 +128,7 @@ def overlap_support(level: Level, vol: np.ndarray,
         axes = VIEW_AXES[view]
         for j, shift in enumerate(square_offsets(k)):
             proposed = level.patches[sites[i], j]  # what u's match says of u + offset_j
-            weight = (w[i] * histogram_factor(level, proposed, view, every)).reshape(vol.shape)
+            weight = (w[i] * histogram_factor(level, patch_bins[sites[i], j], view, every)).reshape(vol.shape)
             proposed = proposed.reshape(vol.shape)
             den += np.roll(weight, tuple(shift), axis=axes)
             if phases is None:

@@ -44,6 +44,11 @@ class LevelHistogram:
         return np.unravel_index(voxels, self.shape)[DEPTH_AXIS[view]]
 
     @property
+    def span(self) -> float:
+        """The range of the bins' values (1 for a single value), the scale of kopf's ``eps``."""
+        return float(self.values[-1] - self.values[0]) or 1.0
+
+    @property
     def volume(self) -> np.ndarray:
         """The block's histogram, as fractions."""
         return self.counts / self.total
