@@ -27,14 +27,14 @@ class LevelHistogram:
         self.values = np.unique(finest)
         n = self.values.size
         self.exemplar = np.bincount(self.bin(exemplar), minlength=n) / exemplar.size
-        self.counts = np.bincount(self.bin(volume), minlength=n).astype(np.int64)
+        bins = self.bin(volume.ravel())
+        self.counts = np.bincount(bins, minlength=n).astype(np.int64)
         self.total = volume.size
         self.shape = volume.shape
         self.slices = {}
         for view in views:  # counts[depth, bin] of every slice of the view
-            depth = self._depth(view, np.arange(volume.size))
             self.slices[view] = np.zeros((volume.shape[DEPTH_AXIS[view]], n), np.int64)
-            np.add.at(self.slices[view], (depth, self.bin(volume.ravel())), 1)
+            np.add.at(self.slices[view], (self._depth(view, np.arange(volume.size)), bins), 1)
 
     def bin(self, values: np.ndarray) -> np.ndarray:
         """The bin of each value (the nearest of the finest exemplar's values)."""
