@@ -13,16 +13,16 @@ from .ml.driver import SweepInfo, SynthesisResult, check_shape, resolve_seed, ru
 
 log = logging.getLogger(__name__)
 
-METHODS = ("ml", "wl", "kopf")
+METHODS = ("ml", "wl", "kopf", "chen-wang")
 #: What :func:`synthesize` returns: the exemplar's own values, or the engine's level indices.
 OUTPUTS = ("values", "labels")
-PLANNED_METHODS = ("chen-wang",)
 #: Options of the search methods (clsolid.search.params.SearchParams).
-_SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order", "causal", "histogram")
+_SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order", "causal", "histogram", "candidates",
+                   "search")
 #: Options of the search methods that are not parameters of the method (what to report).
 _SEARCH_REPORTS = ("site_map",)
 #: The neighbourhood side each method uses when none is given (ML: the thesis case; WL: ch5_np_common).
-DEFAULT_NEIGHBORHOOD = {"ml": 9, "wl": 7, "kopf": 7}
+DEFAULT_NEIGHBORHOOD = {"ml": 9, "wl": 7, "kopf": 7, "chen-wang": 7}
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
                "insert_spacing",
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
@@ -103,12 +103,16 @@ def synthesize(
         textures, top-left 256x256 area-averaged to 64x64; option ``builtin_size``).
     shape : tuple of 3 ints
         ``(Z, Y, X)`` size of the block. Output is toroidal (tileable); any sizes work.
-    method : {"ml", "wl", "kopf"}
+    method : {"ml", "wl", "kopf", "chen-wang"}
         ``"ml"``: the maximum-likelihood method (default). ``"wl"``: Wei-Levoy extended
         to 2D->3D (thesis_spec §1.6.1): every view's exact best match, averaged, over a
         Gaussian pyramid. ``"kopf"``: the same matches combined with Kopf et al.'s robust
         weights and grey-level histogram re-weighting (§1.6.2; a phase, never a blend, on
-        an exemplar of at most 8 values). Their options are ``iterations`` (passes per scale, default 10),
+        an exemplar of at most 8 values). ``"chen-wang"``: each view's choice among its best
+        match's candidate set (option ``candidates``, default 15) under the index
+        histogram, Kopf's weights under the position histogram, and a discrete solver that
+        copies one exemplar pixel (§1.6.3): only exemplar values, and
+        ``SynthesisResult.source`` says which pixel each voxel copies. Their options are ``iterations`` (passes per scale, default 10),
         ``inner`` (most searches per voxel and pass, default 4), ``parent`` (the coarser
         scale's 3x3 in every neighbourhood, default True), ``init`` (``"upsample"``,
         default, or ``"noise"``) and, for ``kopf``, ``rule`` (``"centres"``, the thesis's:
@@ -117,7 +121,9 @@ def synthesize(
         parallel; ``"lexicographic"``, ``"random"``, ``"morton"`` or ``"hilbert"``: one voxel
         at a time, for small blocks), ``causal`` (the L-shaped neighbourhood instead of the
         full square; default False), for ``kopf`` ``histogram`` (``"global"``, default, or
-        ``"slice"``: the re-weighting against the histogram of the voxel's slice), and
+        ``"slice"``: the re-weighting against the histogram of the voxel's slice), ``search``
+        (``"exact"``, default: every exemplar site; ``"coherence"``: the k-coherence
+        candidates of the voxel's neighbours' matches, several times faster), and
         ``site_map=True`` (with ``full_output``) adds the position
         histogram, ``SynthesisResult.site_use``; they return float64 volumes of exemplar values or their means, and
         ``output="labels"`` is refused. The ML-only arguments and options (``heuristic``,
@@ -225,8 +231,7 @@ def synthesize(
         a kernel failed to build.
     """
     if method not in METHODS:
-        planned = f" ({', '.join(PLANNED_METHODS)} are planned, not implemented yet)" if method in PLANNED_METHODS else ""
-        raise InputError(f"method={method!r} is not available{planned}; use one of {METHODS}")
+        raise InputError(f"method={method!r} is not available; use one of {METHODS}")
     _check_output(output)
     valid = (_ML_OPTIONS + _BACKEND_OPTIONS + _RUN_OPTIONS if method == "ml"
              else _SEARCH_OPTIONS + _SEARCH_REPORTS) + ("builtin_size",)
@@ -322,7 +327,7 @@ def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | N
 
 def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, levels, rng, device, progress,
                        output, full_output, options):
-    """:func:`synthesize` for the fixed-neighbourhood search methods (``"wl"``, ``"kopf"``)."""
+    """:func:`synthesize` for the fixed-neighbourhood search methods (``"wl"``, ``"kopf"``, ``"chen-wang"``)."""
     from .search.match import CLMatcher, ReferenceMatcher
     from .search.params import SearchParams
     from .search.driver import run_search
@@ -347,10 +352,10 @@ def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, lev
         dev = select_device(device)
         name, make_matcher = dev.name, (lambda table: CLMatcher(dev, table))
     log.info("synthesising %s from a %s exemplar with %s on %s, seed %d", shape, image.shape, method, name, seed)
-    vol, timings, use = run_search(grey, shape, params, seed, make_matcher, progress, count_sites=site_map)
+    vol, timings, use, source = run_search(grey, shape, params, seed, make_matcher, progress, count_sites=site_map)
     if not full_output:
         return vol
     effective = {**params.to_dict(), "levels": levels, "shape": list(shape)}
     return SynthesisResult(volume=vol, labels=None, exemplar=grey, exemplar_labels=levels_of.labels,
                            level_values=levels_of.values, values_exact=levels_of.exact, seed=seed,
-                           params=effective, device=name, timings=timings, site_use=use)
+                           params=effective, device=name, timings=timings, site_use=use, source=source)

@@ -19,7 +19,8 @@ from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildErro
 from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, RELAXATIONS, SLICE_LAYOUTS,
                      UPSAMPLING, MLParams)
 from .presets import PRESETS, Preset, get_preset
-from .search.params import HISTOGRAMS, ORDERS_ALL, RULES
+from .search.params import DEFAULT_CANDIDATES, HISTOGRAMS, ORDERS_ALL, RULES, SEARCHES
+from .search.params import METHODS as SEARCH_METHODS
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
 _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
@@ -51,10 +52,12 @@ def _add_synth(sub) -> None:
                    help="volume size (default 64 64 64)")
     p.add_argument("--preset", choices=tuple(PRESETS), default=None,
                    help="a thesis experiment's settings (README, Presets); flags given explicitly override them")
-    p.add_argument("--method", default="ml", choices=("ml", "wl", "kopf"),
+    p.add_argument("--method", default="ml", choices=("ml",) + SEARCH_METHODS,
                    help="ml: NP-MRF maximum likelihood (default); wl: Wei-Levoy search and average; "
-                        "kopf: Kopf et al. weights and histogram re-weighting "
-                        "(options --iterations, --inner, --no-parent, --init, and for kopf --rule)")
+                        "kopf: Kopf et al. weights and histogram re-weighting; chen-wang: candidate sets, "
+                        "index and position histograms, exemplar pixels copied "
+                        "(options --iterations, --inner, --no-parent, --init, --order, --causal, --site-map; "
+                        "kopf: --rule, --histogram; chen-wang: --candidates, --source-map)")
     d = MLParams()  # one source for the defaults; argparse shows them with %(default)s
     p.add_argument("--heuristic", default=d.heuristic,
                    help=f"view combination: {', '.join(HEURISTICS)} or a thesis/paper tag (default %(default)s)")
@@ -72,15 +75,23 @@ def _add_synth(sub) -> None:
                    help="kopf: a voxel's value from each view's matched centre (the thesis, default) or from "
                         "every overlapping matched square (Kopf et al.)")
     p.add_argument("--order", choices=ORDERS_ALL, default="sets",
-                   help="wl/kopf: conflict-free sets in parallel (default), or one voxel at a time in raster, "
+                   help="search methods: conflict-free sets in parallel (default), or one voxel at a time in raster, "
                         "random, Morton or Hilbert order (small blocks)")
     p.add_argument("--histogram", choices=HISTOGRAMS, default="global",
                    help="kopf: re-weight by the whole block's histogram (default) or by the voxel's slice's")
     p.add_argument("--causal", action="store_true",
-                   help="wl/kopf: match the L-shaped causal neighbourhood instead of the full square")
+                   help="search methods: match the L-shaped causal neighbourhood instead of the full square")
+    p.add_argument("--search", choices=SEARCHES, default="exact",
+                   help="search methods: each view's best match over every exemplar site (default) or among the "
+                        "k-coherence candidates of the voxel's neighbours' matches (faster)")
+    p.add_argument("--candidates", type=int, default=DEFAULT_CANDIDATES,
+                   help="chen-wang: candidate set size per exemplar pixel, itself included (default %(default)s)")
     p.add_argument("--site-map", type=Path, default=None,
-                   help="wl/kopf: PNG of the position histogram (how often each exemplar pixel is the best "
-                        "match of a voxel; red: never, blue: no complete neighbourhood)")
+                   help="search methods: PNG of the position histogram (how often each exemplar pixel is the "
+                        "best match of a voxel, for chen-wang its source; red: never, blue: no complete "
+                        "neighbourhood)")
+    p.add_argument("--source-map", type=Path, default=None,
+                   help="chen-wang: .npy of the exemplar (row, column) each voxel copies, (Z, Y, X, 2) int64")
     p.add_argument("--scales", type=int, default=d.scales, help="decimation scales (default %(default)s)")
     p.add_argument("--pyramid", choices=PYRAMIDS, default=d.pyramid,
                    help="coarser exemplars: [1 2 1]/4 low-pass then 2:1 decimation, or plain decimation "
@@ -170,8 +181,11 @@ def _parse(parser: argparse.ArgumentParser, argv: list[str] | None) -> argparse.
     preset = get_preset(args.preset)
     _SYNTH_PARSER[0].set_defaults(**_preset_defaults(preset))
     args = parser.parse_args(argv)
-    if args.method != preset.method:
-        parser.error(f"--preset {preset.name} is for --method {preset.method}, not {args.method}")
+    # The search presets are the thesis's common settings of every fixed-neighbourhood method.
+    searches = preset.method in SEARCH_METHODS and args.method in SEARCH_METHODS
+    if args.method != preset.method and not searches:
+        kind = f"{', '.join(SEARCH_METHODS)}" if preset.method in SEARCH_METHODS else preset.method
+        parser.error(f"--preset {preset.name} is for --method {kind}, not {args.method}")
     return args
 
 
@@ -243,7 +257,8 @@ def _tracker(levels: int, records: list):
 _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited",
             "insert_slices", "insert_spacing", "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "indices", "track")
-_WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram", "site_map")
+_WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram", "candidates",
+            "search", "site_map", "source_map")
 
 
 #: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
@@ -312,11 +327,18 @@ def cmd_synth(args) -> int:
     if args.method != "ml":
         options = dict(iterations=args.iterations, inner=args.inner, parent=not args.no_parent,
                        init=args.init, rule=args.rule, order=args.order, causal=args.causal,
-                       histogram=args.histogram, builtin_size=args.builtin_size)
+                       histogram=args.histogram, candidates=args.candidates, search=args.search,
+                       builtin_size=args.builtin_size)
         if args.site_map is not None:
             if args.site_map.suffix.lower() != ".png":
                 raise InputError(f"--site-map {args.site_map} must end in .png")
             options["site_map"] = True
+        if args.source_map is not None:
+            if args.method != "chen-wang":
+                raise InputError(f"--source-map is chen-wang's (it copies exemplar pixels); --method {args.method} "
+                                 "blends them")
+            if args.source_map.suffix.lower() != ".npy":
+                raise InputError(f"--source-map {args.source_map} must end in .npy")
     else:
         options = _ml_options(args)
     hooks = [] if args.quiet else [render_progress]
@@ -358,12 +380,17 @@ def cmd_synth(args) -> int:
         save_preview(args.preview, result.exemplar, result.volume, constrained=views, depths=depths)
     if args.site_map is not None:
         save_site_map(args.site_map, result.site_use)
+    if args.source_map is not None:
+        import numpy as np
+
+        args.source_map.parent.mkdir(parents=True, exist_ok=True)
+        np.save(args.source_map, result.source)
     if args.track is not None:
         args.track.parent.mkdir(parents=True, exist_ok=True)
         args.track.write_text(json.dumps({"exemplar": str(args.exemplar), "seed": result.seed,
                                           "records": records}, indent=2))
     if not args.quiet:
-        others = [str(p) for p in (sidecar, args.preview, args.site_map, args.track) if p is not None]
+        others = [str(p) for p in (sidecar, args.preview, args.site_map, args.source_map, args.track) if p is not None]
         files = others[0] if len(others) == 1 else f"{', '.join(others[:-1])} and {others[-1]}"
         print(f"wrote {written} ({'x'.join(map(str, result.volume.shape))} {written_kind}, seed {result.seed}, "
               f"{result.timings['total_s']:.1f}s on {result.device}), {files}", file=sys.stderr)

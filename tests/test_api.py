@@ -89,8 +89,8 @@ def test_unknown_option_and_method():
     ex = np.arange(256.0).reshape(16, 16)
     with pytest.raises(InputError, match="unknown option"):
         clsolid.synthesize(ex, (4, 4, 4), device="reference", temprature=3, **SMALL)
-    with pytest.raises(InputError, match="planned"):
-        clsolid.synthesize(ex, (4, 4, 4), method="chen-wang", device="reference", **SMALL)
+    with pytest.raises(InputError, match="method='tsvq' is not available"):
+        clsolid.synthesize(ex, (4, 4, 4), method="tsvq", device="reference", **SMALL)
 
 
 def test_memory_is_checked_before_allocating(device, monkeypatch):

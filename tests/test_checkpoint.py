@@ -109,3 +109,4 @@ def test_cli_ctrl_c_names_the_checkpoint(tmp_path, capsys, monkeypatch, device):
     monkeypatch.setattr(clsolid.api, "synthesize", interrupted)
     assert main(["synth", "gravel", "-o", str(tmp_path / "a.npy"), "--checkpoint", str(tmp_path / "ck")]) == 130
     assert f"--resume {tmp_path / 'ck'}" in capsys.readouterr().err
+

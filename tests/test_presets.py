@@ -66,7 +66,15 @@ def test_preset_becomes_the_defaults_and_explicit_flags_win():
 def test_preset_for_another_method_is_refused(capsys):
     with pytest.raises(SystemExit):
         _parse(build_parser(), ["synth", "-o", "x.npy", "--preset", "ch5_np_common", "--method", "ml"])
-    assert "is for --method kopf" in capsys.readouterr().err
+    assert "is for --method wl, kopf, chen-wang" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        _parse(build_parser(), ["synth", "-o", "x.npy", "--preset", "ch5_compare", "--method", "kopf"])
+    assert "is for --method ml" in capsys.readouterr().err
+
+
+def test_a_search_preset_serves_every_search_method():
+    args = _parse(build_parser(), ["synth", "-o", "x.npy", "--preset", "ch5_np_common", "--method", "chen-wang"])
+    assert (args.method, args.neighborhood, args.iterations, args.levels) == ("chen-wang", 7, 10, 32)
 
 
 def test_preset_runs_and_is_recorded(tmp_path, device):

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from clsolid import DeviceMemoryError, InputError
-from clsolid.search.match import (CLMatcher, best_match_reference, causal_weights, exemplar_table,
-                                  square_offsets)
+from clsolid.search.match import (CLMatcher, best_match_reference, candidate_distances_reference,
+                                  causal_weights, exemplar_table, k_nearest_reference, square_offsets)
 
 
 def _exemplar(seed=0, shape=(24, 28), levels=256):
@@ -86,7 +86,51 @@ def test_a_window_of_the_exemplar_finds_itself(device):
     assert idx.tolist() == pick.tolist() and not dist.any()  # random grey levels: no repeats
 
 
+def test_k_nearest_reference_orders_by_distance_then_index():
+    table = np.array([[1, 1], [0, 0], [0, 0], [5, 5], [0, 1]], np.float32)
+    idx, dist = k_nearest_reference(np.array([[0.0, 0.0], [5.0, 5.0]]), table, 3)
+    assert idx.tolist() == [[1, 2, 4], [3, 0, 4]]
+    assert dist.tolist() == [[0.0, 0.0, 1.0], [0.0, 32.0, 41.0]]
+
+
+@pytest.mark.parametrize("count", [1, 5, 15])
+def test_k_nearest_kernel_matches_the_reference_exactly(device, count):
+    """Binary and grey exemplars: many equal distances, all ordered as the reference does."""
+    rng = np.random.default_rng(count)
+    for ex in (_exemplar(2, (30, 26)), (rng.random((30, 26)) < 0.3).astype(np.uint8) * 255):
+        table, _ = exemplar_table(ex, 5)
+        queries = np.clip(table[rng.integers(0, table.shape[0], 300)] + rng.integers(-9, 10, (300, 25)), 0, 255)
+        weights = np.ones(25, np.float32)
+        weights[12] = 0.0  # the centre left out, as a first search does
+        want_i, want_d = k_nearest_reference(queries, table, count, weights)
+        got_i, got_d = CLMatcher(device, table, max_batch=128).nearest(queries, count, weights)
+        np.testing.assert_array_equal(got_i, want_i)
+        np.testing.assert_array_equal(got_d, want_d.astype(np.float32))
+
+
+def test_candidate_distances_kernel_matches_the_reference(device):
+    ex = _exemplar(5, (28, 28))
+    table, _ = exemplar_table(ex, 7)
+    rng = np.random.default_rng(5)
+    queries = np.clip(table[rng.integers(0, table.shape[0], 400)] + rng.integers(-30, 31, (400, 49)), 0, 255)
+    cand = rng.integers(-1, table.shape[0], (400, 15))
+    cand[:, 0] = -1  # "no candidate": +inf
+    want = candidate_distances_reference(queries, table, cand, causal_weights(7))
+    got = CLMatcher(device, table, max_batch=64).distances(queries, cand, causal_weights(7))  # 7 launches
+    assert np.isinf(got[:, 0]).all() and np.isinf(want[:, 0]).all()
+    np.testing.assert_array_equal(got, want.astype(np.float32))
+    brute = k_nearest_reference(queries[:3], table, 1, causal_weights(7))[1][:, 0]
+    every = candidate_distances_reference(queries[:3], table, np.tile(np.arange(table.shape[0]), (3, 1)),
+                                          causal_weights(7))
+    np.testing.assert_array_equal(every.min(axis=1), brute)  # the same distance as the search's
+
+
 @pytest.mark.parametrize("call, word", [
+    (lambda: k_nearest_reference(np.zeros((2, 9)), np.zeros((4, 9)), 5), r"count=5 .* \[1, 4\]"),
+    (lambda: k_nearest_reference(np.zeros((2, 9)), np.zeros((4, 9)), 0), "count=0"),
+    (lambda: candidate_distances_reference(np.zeros((2, 9)), np.zeros((4, 9)), np.zeros((3, 2), int)), r"\(2, C\)"),
+    (lambda: candidate_distances_reference(np.zeros((2, 9)), np.zeros((4, 9)), np.full((2, 2), 4)), "below 4"),
+    (lambda: candidate_distances_reference(np.zeros((2, 9)), np.zeros((4, 9)), np.zeros((2, 2))), "integer"),
     (lambda: exemplar_table(_exemplar(), 4), "odd"),
     (lambda: exemplar_table(_exemplar(), 33), "odd"),
     (lambda: exemplar_table(_exemplar(shape=(6, 40)), 7), "at least 7 x 7"),

@@ -54,7 +54,10 @@ def test_bench_search_runs(capsys, device, tool):
                                 "--shape", "8", "--iterations", "1", "--device", device.device.name.strip()[:8]])
     out = capsys.readouterr().out
     assert "% of matmul" in out and "candidate distances/s" in out and "same site on 100.00% of 8" in out
-    assert "wl: brick" in out and "kopf: brick" in out and "end to end" in out
+    for method in ("wl", "kopf", "chen-wang"):
+        for search in ("exact", "coherence"):
+            assert f"{method}, {search} search: brick" in out
+    assert "end to end" in out
 
 
 def test_gallery_counts_a_blended_voxel_for_its_nearest_level(tool):
@@ -65,3 +68,9 @@ def test_gallery_counts_a_blended_voxel_for_its_nearest_level(tool):
     res = SimpleNamespace(labels=None, level_values=np.array([0, 128, 255], np.uint8),  # uint8, as exemplars
                           volume=np.array([10.0, 130.0, 250.0, 200.0, 63.9]), exemplar_labels=np.zeros(2, np.uint8))
     assert tool("gallery").level_indices(res)[0].tolist() == [0, 1, 2, 2, 0]
+
+
+def test_eta_tool_reports_the_error(capsys, tool):
+    tool("eta").main(["--names", "porous80", "--shape", "16", "--set", "neighborhood=5", "--set", "scales=2"])
+    out = capsys.readouterr().out
+    assert "porous80:" in out and "ETA error after the first:" in out and " %" in out

@@ -8,11 +8,14 @@ neighbourhood terms per second (3 flops a term: subtract, multiply, accumulate) 
 measured in the same run, NumPy's float32 matmul FLOP rate as the reference. Timings
 only: nothing here asserts on speed.
 
-Then grows ch5_np_common (brick 64x64 at 32 levels -> 64^3, 7x7, 3 scales, 10 passes, exact
-search) with each search method, end to end, with the time per pass at each scale.
+Then grows ch5_np_common (brick 64x64 at 32 levels -> 64^3, 7x7, 3 scales, 10 passes) with
+each search method and each search (exact: every site; coherence: the k-coherence
+candidates, clsolid.search.coherence), end to end, with the time per pass at each scale.
+Their quality is compared on the gallery (tools/gallery.py --method kopf --set
+search='"coherence"'), not here.
 
     python tools/bench_search.py                       # 7x7 (ch5_np_common), default device
-    python tools/bench_search.py --neighborhood 11 --device pocl --methods kopf
+    python tools/bench_search.py --neighborhood 11 --device pocl --methods kopf --searches exact
     python tools/bench_search.py --methods none        # the matcher alone
 """
 
@@ -36,8 +39,11 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--reference-queries", type=int, default=256,
                     help="queries the float64 reference times and checks (default 256)")
     ap.add_argument("--device", default=None)
-    ap.add_argument("--methods", nargs="+", default=["wl", "kopf"], choices=["wl", "kopf", "none"],
-                    help="methods grown end to end (default wl kopf; none: the matcher alone)")
+    ap.add_argument("--methods", nargs="+", default=["wl", "kopf", "chen-wang"],
+                    choices=["wl", "kopf", "chen-wang", "none"],
+                    help="methods grown end to end (default wl kopf chen-wang; none: the matcher alone)")
+    ap.add_argument("--searches", nargs="+", default=["exact", "coherence"], choices=["exact", "coherence"],
+                    help="searches each method is grown with (default both)")
     ap.add_argument("--shape", type=int, default=64, help="side of the block grown end to end (default 64)")
     ap.add_argument("--iterations", type=int, default=10, help="passes per scale (default 10)")
     args = ap.parse_args(argv)
@@ -69,14 +75,16 @@ def main(argv: list[str] | None = None) -> None:
     print(f"float64 reference: {n * table.shape[0] / ref_s / 1e6:.1f} M candidate distances/s; "
           f"same site on {np.mean(got[:n] == want):.2%} of {n} queries")
     for method in [m for m in args.methods if m != "none"]:
-        t = time.perf_counter()
-        res = clsolid.synthesize("brick", (args.shape,) * 3, method=method, neighborhood=k, scales=3,
-                                 iterations=args.iterations, rng=1, device=device, full_output=True)
-        total = time.perf_counter() - t
-        levels = "; ".join(f"{'x'.join(map(str, lv['shape']))}: {lv['seconds'] / args.iterations:.2f} s a pass"
-                           for lv in res.timings["levels"])
-        print(f"{method}: brick 64x64, 32 levels -> {args.shape}^3, {k}x{k}, 3 scales, {args.iterations} passes: "
-              f"{total:.1f} s end to end ({levels})")
+        for search in args.searches:
+            t = time.perf_counter()
+            res = clsolid.synthesize("brick", (args.shape,) * 3, method=method, neighborhood=k, scales=3,
+                                     iterations=args.iterations, search=search, rng=1, device=device,
+                                     full_output=True)
+            total = time.perf_counter() - t
+            levels = "; ".join(f"{'x'.join(map(str, lv['shape']))}: {lv['seconds'] / args.iterations:.2f} s a pass"
+                               for lv in res.timings["levels"])
+            print(f"{method}, {search} search: brick 64x64, 32 levels -> {args.shape}^3, {k}x{k}, 3 scales, "
+                  f"{args.iterations} passes: {total:.1f} s end to end ({levels})", flush=True)
 
 
 if __name__ == "__main__":

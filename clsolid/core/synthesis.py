@@ -77,7 +77,12 @@ class SynthesisResult:
         Search methods, when asked (``site_map=True``): the position histogram, ``(H, W)``
         int64, how many voxel neighbourhoods (every voxel, every constrained view) of the
         finished block are nearest to each exemplar pixel's; -1 where the pixel has no
-        complete neighbourhood. :func:`clsolid.preview.save_site_map` draws it.
+        complete neighbourhood (``chen-wang``: how many voxels copy each pixel, its own
+        position histogram). :func:`clsolid.preview.save_site_map` draws it.
+    source : ndarray or None
+        ``method="chen-wang"``: ``(Z, Y, X, 2)`` int64, the exemplar ``(row, column)`` each
+        voxel's value was copied from (``exemplar[source[..., 0], source[..., 1]] ==
+        volume``).
     """
 
     volume: np.ndarray
@@ -91,6 +96,7 @@ class SynthesisResult:
     device: str
     timings: dict
     site_use: np.ndarray | None = None
+    source: np.ndarray | None = None
 
 
 def resolve_seed(rng) -> int:

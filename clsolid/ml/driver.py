@@ -11,6 +11,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .balance import project_bias, score_stride, softmax, sweep_target
+from .forecast import forecast_visits
 from ..errors import InputError
 from ..exemplar import nearest_level_index
 from .model import ScaleModel, build_scale, check_exemplar_fits
@@ -177,28 +178,48 @@ _MIN_TIMED_SWEEP = 0.5  # seconds; shorter sweeps do not predict the finer scale
 
 
 class _Clock:
-    """Per-sweep timing and a rough estimate of the time left."""
+    """Per-sweep timing and an estimate of the time left.
+
+    Within a scale the sweeps still to come and the voxels each visits are known in
+    advance under ICM and Gibbs (:func:`~clsolid.ml.forecast.forecast_visits`), so the
+    time left there is those visits at the last sweep's rate per visit; otherwise
+    (annealing) it is extrapolated from the fall of the global temperature. The scales
+    still to come are estimated from their size.
+    """
 
     def __init__(self, models: list[ScaleModel]):
         self.t0 = time.perf_counter()
         # Work of a full sweep at each scale: voxels x exemplar sites x window terms.
         self.work = [np.prod(m.shape) * m.n_sites * m.patches.shape[0] for m in models]
         self.rate: float | None = None  # seconds per unit of work, measured
+        self.visits: dict[int, int] = {}  # this scale's forecast: sweep -> voxels it visits
 
-    def eta(self, i: int, sweep_s: float, visited: int, model: ScaleModel, t: float, t_prev: float, target: float, sweeps_left: int) -> float:
+    def plan(self, first: int, visits: list[int]) -> None:
+        """The forecast visits of this scale's sweeps from *first* on."""
+        self.visits = {first + k: v for k, v in enumerate(visits)}
+
+    def _left_here(self, sweep: int, sweep_s: float, visited: int, t: float, t_prev: float, target: float,
+                   sweeps_left: int) -> float:
+        if self.visits:
+            coming = sum(v for s, v in self.visits.items() if s > sweep)
+            return sweep_s * coming / visited if visited else 0.0
+        ratio = t / t_prev if t_prev > 0 else 0.0
+        if t <= target or ratio <= 0:
+            left = 0
+        elif ratio >= 1 or target <= 0:
+            left = sweeps_left
+        else:
+            left = min(sweeps_left, math.ceil(math.log(target / t) / math.log(ratio)))
+        return sweep_s * left
+
+    def eta(self, i: int, sweep: int, sweep_s: float, visited: int, model: ScaleModel, t: float, t_prev: float,
+            target: float, sweeps_left: int) -> float:
         unit = model.n_sites * model.patches.shape[0]
         if visited:
             self.rate = sweep_s / (visited * unit)
         if self.rate is None:
             return math.nan
-        ratio = t / t_prev if t_prev > 0 else 0.0
-        if t <= target or ratio <= 0:
-            left_here = 0
-        elif ratio >= 1 or target <= 0:
-            left_here = sweeps_left
-        else:
-            left_here = min(sweeps_left, math.ceil(math.log(target / t) / math.log(ratio)))
-        here = sweep_s * left_here
+        here = 0.0 if sweeps_left == 0 else self._left_here(sweep, sweep_s, visited, t, t_prev, target, sweeps_left)
         if i + 1 == len(self.work):
             return float(here)
         if sweep_s < _MIN_TIMED_SWEEP:
@@ -309,6 +330,9 @@ def run_ml(
                       "temperatures": [], "visited": [], "sweep_seconds": []}
         backend.start_scale(model, vol, temp, params)
         balance = Balance(model, params.balance, vol, bias) if params.balance else None
+        if progress is not None and not annealing:  # the ETA's sweeps, known before they run
+            clock.plan(first, forecast_visits(model, temp, inherited, resynth, params.xi, seed, first, n_sweeps,
+                                              None if params.sweeps else target))
         for sweep in range(first, n_sweeps + 1):
             t_sweep = time.perf_counter()
             if annealing:
@@ -345,7 +369,7 @@ def run_ml(
                                          target, t_now, np.array(bias, dtype=np.float64),
                                          {"scales": timings["scales"] + [record]}))
             if progress is not None:
-                eta = clock.eta(i, sweep_s, visited, model, t_now, t_prev, target,
+                eta = clock.eta(i, sweep, sweep_s, visited, model, t_now, t_prev, target,
                                 0 if done else n_sweeps - sweep)
                 progress(SweepInfo(scale=i + 1, n_scales=len(models), shape=model.shape, sweep=sweep,
                                    max_sweeps=n_sweeps, temperature=t_now,

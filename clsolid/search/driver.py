@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any, Callable
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
@@ -21,14 +21,40 @@ from ..core.orders import visiting_order
 from ..core.schedule import colour_sets, set_order, split_by_colour
 from ..core.synthesis import SweepInfo
 from ..errors import InputError
-from . import kopf, wl
-from .features import centre_weights, exemplar_features, site_use
+from . import chenwang, coherence, kopf, wl
+from .features import centre_weights, exemplar_features, site_use, valid_sites
 from .level import Level, LevelHistogram
+from .match import candidate_sets
 from .params import SearchParams
 from .pyramid import gaussian_pyramid
 
 #: Each method's rule for one conflict-free set: ``update(level, vol, coarse, voxels) -> searches``.
-UPDATES = {"wl": wl.update, "kopf": kopf.update}
+UPDATES = {"wl": wl.update, "kopf": kopf.update, "chen-wang": chenwang.update}
+#: The methods that keep the grey-level histogram of the block (kopf re-weights by it;
+#: chen-wang takes the scale of Kopf's eps from it).
+_HISTOGRAM = ("kopf", "chen-wang")
+
+
+class SearchOutput(NamedTuple):
+    """What :func:`run_search` returns.
+
+    Attributes
+    ----------
+    volume : ndarray
+        The float64 block.
+    timings : dict
+        Per level: shape, sites, searches, seconds; and ``total_s``.
+    site_use : ndarray or None
+        With ``count_sites``: the position histogram (:func:`~clsolid.search.features.site_use`).
+    source : ndarray or None
+        ``chen-wang`` only: ``(Z, Y, X, 2)`` int64, the exemplar ``(row, column)`` each voxel's
+        value was copied from.
+    """
+
+    volume: np.ndarray
+    timings: dict
+    site_use: np.ndarray | None
+    source: np.ndarray | None
 
 
 def level_shapes(shape: tuple[int, int, int], levels: int) -> list[tuple[int, int, int]]:
@@ -42,16 +68,15 @@ def level_shapes(shape: tuple[int, int, int], levels: int) -> list[tuple[int, in
 def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: SearchParams, seed: int,
                make_matcher: Callable[[np.ndarray], Any],
                progress: Callable[[SweepInfo], None] | None = None,
-               count_sites: bool = False) -> tuple[np.ndarray, dict, np.ndarray | None]:
+               count_sites: bool = False) -> SearchOutput:
     """Grow a ``shape`` block from a 2D *exemplar* (float grey levels) with ``params.method``.
 
     *make_matcher(table)* returns an object with ``best(queries, weights)`` (a
     :class:`~clsolid.search.match.CLMatcher` or :class:`~clsolid.search.match.ReferenceMatcher`).
     *progress* gets a :class:`~clsolid.core.synthesis.SweepInfo` after every pass (no
-    temperatures: those fields are NaN). Returns the float64 volume, the timings and, with
-    *count_sites*, the position histogram of the finished block
-    (:func:`~clsolid.search.features.site_use`: every voxel matched once more in every view;
-    else None).
+    temperatures: those fields are NaN). Returns a :class:`SearchOutput`; with *count_sites*
+    its position histogram counts, for ``chen-wang``, each voxel's source, and for the others
+    every voxel matched once more in every view.
     """
     k = params.neighborhood
     shapes = level_shapes(shape, params.scales)
@@ -60,20 +85,16 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
     pyr = gaussian_pyramid(exemplar, params.scales)
     timings: dict = {"levels": []}
     t0 = time.perf_counter()
-    coarse, use = None, None
+    coarse, use, source, coh = None, None, None, None
     for level in range(params.scales - 1, -1, -1):
         t_level = time.perf_counter()
         parent_img = pyr[level + 1] if params.parent and level + 1 < params.scales else None
         table, centres = exemplar_features(pyr[level], parent_img, k)
         use_parent = parent_img is not None
+        parent_shape = None if parent_img is None else parent_img.shape
         vol = _start(pyr[level], shapes[level], coarse, params.init, seed, level)
-        ctx = Level(params=params, matcher=make_matcher(table), centres=centres,
-                    patches=table[:, : k * k].astype(np.float64), values=np.unique(pyr[level]),
-                    w_first=centre_weights(k, use_parent, centre=False, causal=params.causal),
-                    w_again=centre_weights(k, use_parent, centre=True, causal=params.causal),
-                    histogram=LevelHistogram(pyr[0], pyr[level], vol,
-                                             params.view_names if params.histogram == "slice" else ())
-                    if params.method == "kopf" else None)
+        ctx = _level(params, pyr, level, parent_shape, table, centres, vol, make_matcher(table), coh)
+        coh = ctx.coherence
         update = UPDATES[params.method]
         colour, n_sets = colour_sets(shapes[level], k // 2)
         sets = split_by_colour(np.ones(shapes[level], bool), colour, n_sets)
@@ -96,11 +117,40 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
         timings["levels"].append({"level": level, "shape": list(shapes[level]), "n_sites": int(table.shape[0]),
                                   "searches": searches, "seconds": time.perf_counter() - t_level})
         if count_sites and level == 0:
-            sites = wl.matches(ctx, vol, parent, np.arange(vol.size), ctx.w_first)[0]
-            use = site_use(pyr[0].shape, None if parent_img is None else parent_img.shape, k, sites)
+            sites = (ctx.sources.source if ctx.sources is not None
+                     else wl.matches(ctx, vol, parent, np.arange(vol.size), ctx.w_first)[0])
+            use = site_use(pyr[0].shape, parent_shape, k, sites)
+        if ctx.sources is not None and level == 0:
+            rows, cols = valid_sites(pyr[0].shape, parent_shape, k)
+            source = np.stack([rows[ctx.sources.source], cols[ctx.sources.source]], axis=-1).reshape(vol.shape + (2,))
         coarse = vol
     timings["total_s"] = time.perf_counter() - t0
-    return coarse, timings, use
+    return SearchOutput(coarse, timings, use, source)
+
+
+def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape: tuple[int, int] | None,
+           table: np.ndarray, centres: np.ndarray, vol: np.ndarray, matcher: Any,
+           coarser: coherence.Coherence | None) -> Level:
+    """One level's :class:`Level`: weights, and what the method and search keep (the
+    grey-level histogram; chen-wang's candidate sets and histograms; the coherence state,
+    started from the *coarser* level's)."""
+    k, use_parent = params.neighborhood, parent_shape is not None
+    ctx = Level(params=params, matcher=matcher, centres=centres,
+                patches=table[:, : k * k].astype(np.float64), values=np.unique(pyr[level]),
+                w_first=centre_weights(k, use_parent, centre=False, causal=params.causal),
+                w_again=centre_weights(k, use_parent, centre=True, causal=params.causal))
+    if params.method in _HISTOGRAM:
+        ctx.histogram = LevelHistogram(pyr[0], pyr[level], vol, params.view_names if params.histogram == "slice" else ())
+    if params.method == "chen-wang":
+        cands = candidate_sets(matcher, table, params.candidates, ctx.w_again)
+        ctx.sources = chenwang.Sources.start(cands, vol.size, len(params.view_names))
+    if params.search == "coherence":
+        rows, cols = valid_sites(pyr[level].shape, parent_shape, k)
+        similar = candidate_sets(matcher, table, coherence.SIMILAR, ctx.w_again)
+        ctx.coherence = coherence.Coherence(rows, cols, pyr[level].shape, similar, vol.shape, params.view_names)
+        if coarser is not None:
+            ctx.coherence.inherit(coarser)
+    return ctx
 
 
 def _start(exemplar: np.ndarray, shape: tuple[int, int, int], coarse: np.ndarray | None, init: str,
@@ -113,15 +163,16 @@ def _start(exemplar: np.ndarray, shape: tuple[int, int, int], coarse: np.ndarray
     return coarse[idx].astype(np.float64)
 
 
-#: Rough cost of a finer level against the one before it: 8x the voxels, about 4x the sites.
-_FINER_COST = 32.0
+#: Rough cost of a finer level against the one before it, by search: 8x the voxels, and with
+#: the exhaustive search about 4x the sites (the coherence candidates do not grow).
+_FINER_COST = {"exact": 32.0, "coherence": 8.0}
 
 
 def _report(params: SearchParams, level: int, it: int, shape: tuple[int, int, int], last_s: float,
             elapsed: float, exemplar: np.ndarray, vol: np.ndarray) -> SweepInfo:
     """The progress report after pass *it* of *level*, with a rough ETA from the last pass."""
     left = (params.iterations - it) * last_s
-    left += sum(params.iterations * last_s * _FINER_COST**j for j in range(1, level + 1))
+    left += sum(params.iterations * last_s * _FINER_COST[params.search]**j for j in range(1, level + 1))
     return SweepInfo(scale=params.scales - level, n_scales=params.scales, shape=tuple(shape), sweep=it,
                      max_sweeps=params.iterations, temperature=math.nan, initial_temperature=math.nan,
                      target=math.nan, visited=int(np.prod(shape)), elapsed=elapsed, eta=left,

@@ -86,9 +86,19 @@ def voxel_features(volume: np.ndarray, coarse: np.ndarray | None, voxels: np.nda
     return np.concatenate(parts, axis=1)
 
 
+def square_voxels(shape: tuple[int, int, int], pos: np.ndarray, row_axis: int, col_axis: int,
+                  k: int) -> np.ndarray:
+    """``(m, k*k)`` flat indices of the k x k squares (toroidal) of a *shape* block around
+    the voxels at *pos* ``(3, m)``, in the plane of (*row_axis*, *col_axis*), read row by row
+    (as :func:`~clsolid.search.match.square_offsets`)."""
+    stride = (shape[1] * shape[2], shape[2], 1)
+    depth = 3 - row_axis - col_axis
+    r = np.arange(k) - k // 2
+    rows = ((pos[row_axis][:, None] + r) % shape[row_axis]) * stride[row_axis]  # (m, k): k distinct rows
+    cols = ((pos[col_axis][:, None] + r) % shape[col_axis]) * stride[col_axis]
+    base = (pos[depth] % shape[depth]) * stride[depth]
+    return (base[:, None, None] + rows[:, :, None] + cols[:, None, :]).reshape(pos.shape[1], k * k)
+
+
 def _square(vol: np.ndarray, pos: np.ndarray, row_axis: int, col_axis: int, k: int) -> np.ndarray:
-    off = square_offsets(k)
-    idx = [np.broadcast_to((pos[a] % vol.shape[a])[:, None], (pos.shape[1], off.shape[0])) for a in range(3)]
-    idx[row_axis] = (pos[row_axis][:, None] + off[:, 0]) % vol.shape[row_axis]
-    idx[col_axis] = (pos[col_axis][:, None] + off[:, 1]) % vol.shape[col_axis]
-    return vol[tuple(idx)]
+    return np.take(vol, square_voxels(vol.shape, pos, row_axis, col_axis, k))

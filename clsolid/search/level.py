@@ -75,7 +75,9 @@ class Level:
     """One level's matcher and tables: ``centres[s]`` is site s's centre value and
     ``patches[s]`` its k x k square, row by row; ``values`` the level image's distinct
     values; the first search of a voxel weighs its terms by ``w_first`` (centre left out),
-    repeated ones by ``w_again``; ``histogram`` only for ``kopf``."""
+    repeated ones by ``w_again``; ``histogram`` for ``kopf`` and ``chen-wang``, ``sources``
+    (:class:`~clsolid.search.chenwang.Sources`) for ``chen-wang``, ``coherence``
+    (:class:`~clsolid.search.coherence.Coherence`) for the accelerated search."""
 
     params: SearchParams
     matcher: Any
@@ -85,3 +87,14 @@ class Level:
     w_first: np.ndarray
     w_again: np.ndarray
     histogram: LevelHistogram | None = None
+    sources: Any = None
+    coherence: Any = None
+
+    def best(self, view: int, voxels: np.ndarray, queries: np.ndarray,
+             weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The best match of *voxels* (their *queries*) in the *view*-th constrained view:
+        exhaustive, or among k-coherence candidates (``search="coherence"``,
+        :class:`~clsolid.search.coherence.Coherence`). Returns ``(site (m,), distance (m,))``."""
+        if self.coherence is None:
+            return self.matcher.best(queries, weights)
+        return self.coherence.best(self.matcher, view, voxels, queries, weights)

@@ -1,5 +1,7 @@
-"""Exact nearest-neighbourhood search over an exemplar: the table of its neighbourhoods,
-a NumPy float64 reference and the OpenCL matcher (``kernels/search/match.cl``).
+"""Nearest-neighbourhood search over an exemplar: the table of its neighbourhoods, NumPy
+float64 references and the OpenCL matcher (``kernels/search/match.cl``): the exact K
+nearest sites of each query (K = 1: the best match), and the distances from each query to
+its own list of candidate sites (``chen-wang``'s candidate sets).
 
 A neighbourhood is the k x k square centred on a pixel, read row by row (offsets from
 :func:`square_offsets`); the distance is the weighted sum of squared differences, with
@@ -8,7 +10,8 @@ weight 1 everywhere (full square) or 0 on the centre and the terms after it
 whole square lies inside the exemplar are candidates (thesis_spec §1: no wrap-around in
 the exemplar). The best match is the candidate of least distance, the lowest site index
 on a tie, on the device as in the reference: for integer grey levels every partial sum is
-an integer below 2^24, exact in float32, so the two agree exactly.
+an integer below 2^24, exact in float32, so the two agree exactly. The K nearest are
+ordered by distance, then by site index.
 """
 
 from __future__ import annotations
@@ -28,6 +31,8 @@ PAD = 1e19
 LOCAL = 64
 #: Neighbourhood sides the matcher accepts (odd).
 MIN_SIDE, MAX_SIDE = 3, 31
+#: Most nearest sites kept per query (each work-item keeps them sorted in private memory).
+MAX_K = 64
 
 
 def check_side(k: Any) -> int:
@@ -88,33 +93,95 @@ def _weights(weights: np.ndarray | None, dim: int) -> np.ndarray:
     return w
 
 
+def k_nearest_reference(queries: np.ndarray, table: np.ndarray, count: int,
+                        weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Float64 brute force: for each query the *count* sites of least weighted SSD, nearest
+    first, the lower index first among equal distances.
+
+    Returns ``(site indices (m, count) int64, distances (m, count) float64)``.
+    """
+    t = np.asarray(table, np.float64)
+    q = _check_queries(queries, t.shape[1]).astype(np.float64)
+    w = _weights(weights, t.shape[1]).astype(np.float64)
+    count = _check_count(count, t.shape[0])
+    idx = np.empty((q.shape[0], count), np.int64)
+    dist = np.empty((q.shape[0], count))
+    for i in range(0, q.shape[0], 256):  # bounded memory: 256 x n_sites distances at a time
+        d = (((q[i : i + 256, None, :] - t[None, :, :]) ** 2) * w).sum(axis=2)
+        if count == 1:  # argmin: the first minimum, the lowest index (and far cheaper than a sort)
+            order = np.argmin(d, axis=1)[:, None]
+        else:
+            order = np.argsort(d, axis=1, kind="stable")[:, :count]  # stable: ties by index
+        idx[i : i + 256] = order
+        dist[i : i + 256] = np.take_along_axis(d, order, axis=1)
+    return idx, dist
+
+
 def best_match_reference(queries: np.ndarray, table: np.ndarray,
                          weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Float64 brute force: for each query the lowest-index site of least weighted SSD.
 
     Returns ``(site index (m,) int64, distance (m,) float64)``.
     """
+    idx, dist = k_nearest_reference(queries, table, 1, weights)
+    return idx[:, 0], dist[:, 0]
+
+
+def candidate_distances_reference(queries: np.ndarray, table: np.ndarray, candidates: np.ndarray,
+                                  weights: np.ndarray | None = None) -> np.ndarray:
+    """Float64: the weighted SSD between each query and each of its candidate sites.
+
+    *candidates* is ``(m, C)`` site indices (a negative one: no candidate, distance +inf).
+    Returns ``(m, C)`` float64.
+    """
     t = np.asarray(table, np.float64)
     q = _check_queries(queries, t.shape[1]).astype(np.float64)
     w = _weights(weights, t.shape[1]).astype(np.float64)
-    idx = np.empty(q.shape[0], np.int64)
-    dist = np.empty(q.shape[0])
-    for i in range(0, q.shape[0], 256):  # bounded memory: 256 x n_sites distances at a time
-        d = (((q[i : i + 256, None, :] - t[None, :, :]) ** 2) * w).sum(axis=2)
-        idx[i : i + 256] = np.argmin(d, axis=1)  # the first minimum: the lowest index
-        dist[i : i + 256] = d[np.arange(d.shape[0]), idx[i : i + 256]]
-    return idx, dist
+    cand = _check_candidates(candidates, q.shape[0], t.shape[0])
+    d = (((q[:, None, :] - t[np.maximum(cand, 0)]) ** 2) * w).sum(axis=2)
+    return np.where(cand < 0, np.inf, d)
+
+
+def _check_count(count, n_sites: int) -> int:
+    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or not 1 <= count <= min(n_sites, MAX_K):
+        raise InputError(f"count={count!r} must be an integer in [1, {min(n_sites, MAX_K)}] (the sites "
+                         f"kept per query, at most the {n_sites} sites of the table and {MAX_K})")
+    return int(count)
+
+
+def _check_candidates(candidates: np.ndarray, m: int, n_sites: int) -> np.ndarray:
+    c = np.asarray(candidates)
+    if c.ndim != 2 or c.shape[0] != m or not np.issubdtype(c.dtype, np.integer) or np.any(c >= n_sites):
+        raise InputError(f"candidates must be an ({m}, C) integer array of site indices below {n_sites}; "
+                         f"got shape {c.shape}, dtype {c.dtype}")
+    return c
+
+
+def candidate_sets(matcher: Any, table: np.ndarray, count: int, weights: np.ndarray) -> np.ndarray:
+    """``(n_sites, count)`` site indices: each site first, then its ``count - 1`` nearest
+    other sites (nearest first, lower index first on a tie), by *weights*' distance.
+
+    "Each pixel is considered to belong to his own set": among equal neighbourhoods (the
+    flat squares of a binary exemplar) the nearest by index need not include the site
+    itself, so it is put first and the nearest others follow.
+    """
+    n_sites = table.shape[0]
+    count = min(count, n_sites)
+    near = matcher.nearest(table, count, weights)[0]
+    self_ = np.arange(n_sites)[:, None]
+    others = np.take_along_axis(near, np.argsort(near == self_, axis=1, kind="stable"), axis=1)[:, : count - 1]
+    return np.concatenate([self_, others], axis=1)
 
 
 class CLMatcher:
-    """The exact best match on an OpenCL device, for a fixed table.
+    """Nearest-neighbourhood search on an OpenCL device, for a fixed table.
 
     Parameters
     ----------
     device : Device
         From :func:`clsolid.select_device`.
     table : ndarray, ``(n_sites, dim)``
-        The candidates (:func:`exemplar_table`).
+        The sites (:func:`exemplar_table`).
     weights : ndarray, ``(dim,)``, optional
         Per-term weights of the distance (default: all 1).
     max_batch : int
@@ -130,22 +197,58 @@ class CLMatcher:
             raise InputError(f"the table must be a non-empty (n_sites, dim) array; got shape {self.table.shape}")
         self.device, self.dim, self.max_batch = device, self.table.shape[1], int(max_batch)
         weights = _weights(weights, self.dim)
-        for name, nbytes in (("match table", self.table.nbytes + 16 * self.dim * 4),
-                             ("match queries", self.max_batch * self.dim * 4)):
+        for name, nbytes in (("match table", self.table.nbytes + 16 * self.dim * 4),  # each of two copies
+                             ("match queries", self.max_batch * self.dim * 4),
+                             ("match results", self.max_batch * MAX_K * 4)):
             if nbytes > device.max_alloc:
                 raise DeviceMemoryError(name, nbytes, device.max_alloc)
-        vw = probe(device.device).vector_width or VECTOR_WIDTHS[0]
-        self.n_pad = -(-self.table.shape[0] // vw) * vw
+        self._vw = probe(device.device).vector_width or VECTOR_WIDTHS[0]
+        self.n_pad = -(-self.table.shape[0] // self._vw) * self._vw
         table_t = np.full((self.dim, self.n_pad), PAD, np.float32)  # sites along the vectors
         table_t[:, : self.table.shape[0]] = self.table.T
         mf = cl.mem_flags
         ctx = device.context
         self._table = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=table_t)
+        self._rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=self.table)  # for candidates
         self._weights = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=weights)
         self._queries = cl.Buffer(ctx, mf.READ_ONLY, self.max_batch * self.dim * 4)
-        self._site = cl.Buffer(ctx, mf.WRITE_ONLY, self.max_batch * 4)
-        self._dist = cl.Buffer(ctx, mf.WRITE_ONLY, self.max_batch * 4)
-        self._kernel = programs.build(device, "search/match.cl", {"DIM": self.dim, "VW": vw})["best_match"]
+        self._site = cl.Buffer(ctx, mf.READ_WRITE, self.max_batch * MAX_K * 4)
+        self._dist = cl.Buffer(ctx, mf.WRITE_ONLY, self.max_batch * MAX_K * 4)
+
+    def _kernel(self, name: str, count: int = 1):
+        return programs.build(self.device, "search/match.cl", {"DIM": self.dim, "VW": self._vw, "K": count})[name]
+
+    def _set_weights(self, weights: np.ndarray | None) -> None:
+        import pyopencl as cl
+
+        if weights is not None:
+            cl.enqueue_copy(self.device.queue, self._weights, _weights(weights, self.dim))
+
+    def nearest(self, queries: np.ndarray, count: int,
+                weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """For each query row the *count* nearest sites, nearest first (lower index first on
+        a tie), and their distances.
+
+        *weights*, if given, replace the distance's per-term weights from now on.
+        Returns ``(site indices (m, count) int64, distances (m, count) float32)``.
+        """
+        import pyopencl as cl
+
+        count = _check_count(count, self.table.shape[0])
+        self._set_weights(weights)
+        q = np.ascontiguousarray(_check_queries(queries, self.dim), np.float32)
+        idx, dist = np.empty((q.shape[0], count), np.int32), np.empty((q.shape[0], count), np.float32)
+        queue, kernel, batch = self.device.queue, self._kernel("k_nearest", count), self.max_batch
+        for i in range(0, q.shape[0], batch):
+            part = q[i : i + batch]
+            n = part.shape[0]
+            cl.enqueue_copy(queue, self._queries, part)
+            # explicit work-groups: CPU runtimes vectorise across the queries of a group
+            kernel(queue, (-(-n // LOCAL) * LOCAL,), (LOCAL,), self._queries, self._table, self._weights,
+                   np.int32(n), np.int32(self.n_pad), self._site, self._dist)
+            cl.enqueue_copy(queue, idx[i : i + n], self._site)
+            cl.enqueue_copy(queue, dist[i : i + n], self._dist)
+        return idx.astype(np.int64), dist
 
     def best(self, queries: np.ndarray, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """For each query row the lowest-index site of least distance, and that distance.
@@ -153,33 +256,54 @@ class CLMatcher:
         *weights*, if given, replace the distance's per-term weights from now on.
         Returns ``(site index (m,) int64, distance (m,) float32)``.
         """
+        idx, dist = self.nearest(queries, 1, weights)
+        return idx[:, 0], dist[:, 0]
+
+    def distances(self, queries: np.ndarray, candidates: np.ndarray,
+                  weights: np.ndarray | None = None) -> np.ndarray:
+        """The distance from each query row to each of its candidate sites, ``(m, C)`` float32
+        (+inf for a negative candidate). *weights* as for :meth:`best`."""
         import pyopencl as cl
 
-        if weights is not None:
-            cl.enqueue_copy(self.device.queue, self._weights, _weights(weights, self.dim))
+        self._set_weights(weights)
         q = np.ascontiguousarray(_check_queries(queries, self.dim), np.float32)
-        idx, dist = np.empty(q.shape[0], np.int32), np.empty(q.shape[0], np.float32)
-        queue = self.device.queue
-        for i in range(0, q.shape[0], self.max_batch):
-            part = q[i : i + self.max_batch]
-            n = part.shape[0]
-            cl.enqueue_copy(queue, self._queries, part)
-            # explicit work-groups: CPU runtimes vectorise across the queries of a group
-            self._kernel(queue, (-(-n // LOCAL) * LOCAL,), (LOCAL,), self._queries, self._table, self._weights, np.int32(n),
-                         np.int32(self.n_pad), self._site, self._dist)
-            cl.enqueue_copy(queue, idx[i : i + n], self._site)
-            cl.enqueue_copy(queue, dist[i : i + n], self._dist)
-        return idx.astype(np.int64), dist
+        cand = np.ascontiguousarray(_check_candidates(candidates, q.shape[0], self.table.shape[0]), np.int32)
+        n_cand = cand.shape[1]
+        out = np.empty(cand.shape, np.float32)
+        queue, kernel = self.device.queue, self._kernel("candidate_distances")
+        batch = max(1, min(self.max_batch, self.max_batch * MAX_K // max(n_cand, 1)))  # pairs fit _site/_dist
+        for i in range(0, q.shape[0], batch):
+            n = min(batch, q.shape[0] - i)
+            cl.enqueue_copy(queue, self._queries, q[i : i + n])
+            cl.enqueue_copy(queue, self._site, cand[i : i + n])
+            pairs = n * n_cand
+            kernel(queue, (-(-pairs // LOCAL) * LOCAL,), (LOCAL,), self._queries, self._rows, self._weights,
+                   self._site, np.int32(pairs), np.int32(n_cand), self._dist)
+            cl.enqueue_copy(queue, out[i : i + n], self._dist)
+        return out
 
 
 class ReferenceMatcher:
-    """:class:`CLMatcher`'s interface on :func:`best_match_reference` (float64, for tests)."""
+    """:class:`CLMatcher`'s interface on the float64 references (for tests)."""
 
     def __init__(self, table: np.ndarray, weights: np.ndarray | None = None) -> None:
         self.table = np.asarray(table, np.float32)
         self.weights = _weights(weights, self.table.shape[1])
 
-    def best(self, queries: np.ndarray, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def _set_weights(self, weights: np.ndarray | None) -> None:
         if weights is not None:
             self.weights = _weights(weights, self.table.shape[1])
+
+    def nearest(self, queries: np.ndarray, count: int,
+                weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        self._set_weights(weights)
+        return k_nearest_reference(queries, self.table, count, self.weights)
+
+    def best(self, queries: np.ndarray, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        self._set_weights(weights)
         return best_match_reference(queries, self.table, self.weights)
+
+    def distances(self, queries: np.ndarray, candidates: np.ndarray,
+                  weights: np.ndarray | None = None) -> np.ndarray:
+        self._set_weights(weights)
+        return candidate_distances_reference(queries, self.table, candidates, self.weights)

@@ -8,10 +8,10 @@ from dataclasses import asdict, dataclass
 from ..core.orders import ORDERS
 from ..core.views import VIEW_SETS
 from ..errors import InputError
-from .match import check_side
+from .match import MAX_K, check_side
 
-#: The search methods implemented so far (issue 11 adds "kopf" and "chen-wang").
-METHODS = ("wl", "kopf")
+#: The search methods.
+METHODS = ("wl", "kopf", "chen-wang")
 #: How a finer level starts (thesis_spec §1.3, ambiguous there): the coarser result
 #: up-sampled (Kopf), or fresh noise tied to the coarser level only by the parent square.
 INITS = ("upsample", "noise")
@@ -24,6 +24,11 @@ ORDERS_ALL = ("sets",) + ORDERS
 #: kopf's histogram re-weighting: against the whole block's histogram, or the slice's (in the
 #: view of the match) that holds the voxel.
 HISTOGRAMS = ("global", "slice")
+#: How each voxel's best match is found: the exhaustive search (the reference) or among
+#: k-coherence candidates (clsolid.search.coherence).
+SEARCHES = ("exact", "coherence")
+#: chen-wang's candidate set size (thesis §5.2.1, §6.3.3).
+DEFAULT_CANDIDATES = 15
 
 
 def _int_in(name: str, value, lo: int, hi: int) -> int:
@@ -38,11 +43,14 @@ class SearchParams:
 
     Attributes
     ----------
-    method : {"wl", "kopf"}
+    method : {"wl", "kopf", "chen-wang"}
         ``"wl"``: Wei-Levoy extended to 2D->3D (thesis_spec §1.6.1): each view's best
         match, averaged; repeated per voxel with the centre included until the matches
         stop changing. ``"kopf"``: each view's best match weighted by Kopf's robust
         weight and the grey-level histogram re-weighting (§1.6.2; ``clsolid.search.kopf``).
+        ``"chen-wang"``: each view's choice among its best match's candidate set by the
+        index histogram, Kopf's weights re-weighted by the position histogram, and the
+        discrete solver that copies one exemplar pixel (§1.6.3; ``clsolid.search.chenwang``).
     neighborhood : int
         Side of the full square (odd; the thesis uses 5-11; default 7, ``ch5_np_common``).
     scales : int
@@ -83,6 +91,14 @@ class SearchParams:
         ``kopf`` only: re-weight each view's match by the whole block's grey-level
         histogram (Kopf's, default) or by that of the view's slice holding the voxel (the
         thesis's option).
+    search : {"exact", "coherence"}
+        How each view's best match is found: the exhaustive search over every exemplar
+        site (default, the reference), or the accelerated one, among the k-coherence
+        candidates that the voxel's 3 x 3 neighbours' matches propose
+        (``clsolid.search.coherence``; exhaustive where they propose none).
+    candidates : int
+        ``chen-wang`` only: the size of each exemplar site's candidate set, the site itself
+        included (the thesis's k; tested with 1, 5, 15, 25; default 15).
     """
 
     method: str = "wl"
@@ -97,6 +113,8 @@ class SearchParams:
     order: str = "sets"
     causal: bool = False
     histogram: str = "global"
+    candidates: int = DEFAULT_CANDIDATES
+    search: str = "exact"
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -122,6 +140,12 @@ class SearchParams:
             raise InputError(f"histogram={self.histogram!r} must be one of {', '.join(map(repr, HISTOGRAMS))}")
         if self.histogram != "global" and self.method != "kopf":
             raise InputError(f"histogram={self.histogram!r} is kopf's re-weighting; method {self.method!r} has none")
+        if self.search not in SEARCHES:
+            raise InputError(f"search={self.search!r} must be one of {', '.join(map(repr, SEARCHES))}")
+        _int_in("candidates", self.candidates, 1, MAX_K)
+        if self.candidates != DEFAULT_CANDIDATES and self.method != "chen-wang":
+            raise InputError(f"candidates={self.candidates!r} is chen-wang's candidate set; method "
+                             f"{self.method!r} has none")
         if not isinstance(self.causal, bool):
             raise InputError(f"causal={self.causal!r} must be True or False")
         if self.causal and self.rule == "overlap":

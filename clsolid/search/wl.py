@@ -18,7 +18,8 @@ def matches(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np
             weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each view's best site and its weighted squared distance, ``(views, m)`` each."""
     k = level.params.neighborhood
-    found = [level.matcher.best(voxel_features(vol, coarse, voxels, v, k), weights) for v in level.params.view_names]
+    found = [level.best(i, voxels, voxel_features(vol, coarse, voxels, v, k), weights)
+             for i, v in enumerate(level.params.view_names)]
     return np.stack([f[0] for f in found]), np.stack([f[1] for f in found]).astype(np.float64)
 
 

@@ -1,0 +1,43 @@
+"""How many sweeps a scale will take, known before it runs (for the ETA).
+
+Under ICM and Gibbs relaxation a voxel's temperature becomes ``max(0, (xi + sum_r t_r) /
+|N|)`` over its neighbours (thesis_spec §2.4), whatever labels it or they hold; which
+voxels a sweep visits and in what order follow from the temperatures, the trusted voxels
+and the seed alone. So the whole temperature trajectory of a scale can be replayed
+without a single likelihood: the same conflict-free sets, in the same seeded order, with
+the float64 reference's temperature update. The replay costs one neighbourhood sum per
+voxel and sweep, against the run's sum over every exemplar site.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..core.schedule import set_order, split_by_colour
+from .model import ScaleModel
+from .reference import new_temperature
+
+
+def forecast_visits(model: ScaleModel, temp: np.ndarray, inherited: np.ndarray, resynth: bool, xi: float,
+                    seed: int, first: int, last: int, target: float | None) -> list[int]:
+    """Voxels visited by each sweep from *first* to the one that ends the scale (at most
+    *last*; with a *target*, also the first whose global temperature is at most the target
+    or 0), replaying the driver's temperature schedule from the temperatures *temp* (ICM
+    and Gibbs; not annealing, whose visits do not depend on temperatures)."""
+    temp = np.array(temp, dtype=np.float64).reshape(model.shape)
+    inherited = np.asarray(inherited, dtype=bool).reshape(model.shape)
+    flat = temp.reshape(-1)
+    visits = []
+    for sweep in range(first, last + 1):
+        active = (temp > 0) | (inherited & resynth)
+        sets = split_by_colour(active, model.colour, model.n_sets)
+        for c in set_order(model.n_sets, seed, model.level, sweep):
+            voxels = sets[c]
+            if voxels.size:
+                hot = flat[voxels] > 0  # inherited voxels are re-synthesised at t = 0, which stays
+                flat[voxels[hot]] = new_temperature(model, temp, voxels[hot], xi)
+        visits.append(int(active.sum()))
+        t_now = float(flat.sum())
+        if target is not None and (t_now <= target or t_now == 0.0):
+            break
+    return visits

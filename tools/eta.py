@@ -1,0 +1,59 @@
+"""How right the progress ETA is (issue 12, point 6: within 20 % after the first sweep of
+the finest scale).
+
+Grows each exemplar with the defaults (or --set NAME=VALUE), records the ETA reported after
+every sweep, and compares it with the time the run then actually took. Prints, per
+exemplar, the error after the first finest-scale sweep and the largest error over the
+finest scale's sweeps (positive: the ETA said more time than was left).
+
+    python tools/eta.py                                  # brick, porous50, gravel at 64^3
+    python tools/eta.py --names hrtem --shape 48 --set relaxation='"icm"'
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import clsolid
+from clsolid.gallery import gallery_exemplar
+
+
+def measure(name: str, shape: int, seed: int, device, options: dict) -> dict:
+    """One run's (scale, sweep, elapsed, eta) reports and the ETA's relative errors on the finest scale."""
+    image = name if name in ("brick", "grass", "gravel") else gallery_exemplar(name, 64)
+    reports = []
+    t0 = time.perf_counter()
+    clsolid.synthesize(image, (shape,) * 3, rng=seed, device=device,
+                       progress=lambda i: reports.append((i.scale, i.n_scales, i.sweep, time.perf_counter() - t0, i.eta)),
+                       **options)
+    end = time.perf_counter() - t0
+    finest = [r for r in reports if r[0] == r[1]]
+    errors = [(eta - (end - at)) / (end - at) for _, _, _, at, eta in finest[:-1]]  # the last: nothing left
+    return {"name": name, "seconds": end, "sweeps": len(finest), "first": errors[0] if errors else None,
+            "worst": max(errors, key=abs) if errors else None}
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--names", nargs="+", default=["brick", "porous50", "gravel"])
+    ap.add_argument("--shape", type=int, default=64, help="cube side (default 64)")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--device", default=None)
+    ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                    help="a synthesize option, the value as JSON (repeatable)")
+    args = ap.parse_args(argv)
+    options = {k: json.loads(v) for k, v in (s.split("=", 1) for s in args.set)}
+    device = clsolid.select_device(args.device)
+    print(f"device: {device.name}; {args.shape}^3, seed {args.seed}, settings {options or 'defaults'}")
+    for name in args.names:
+        r = measure(name, args.shape, args.seed, device, options)
+        first = "–" if r["first"] is None else f"{100 * r['first']:+.0f} %"
+        worst = "–" if r["worst"] is None else f"{100 * r['worst']:+.0f} %"
+        print(f"{name}: {r['seconds']:.1f} s, {r['sweeps']} finest sweeps; ETA error after the first: {first}, "
+              f"worst on the finest scale: {worst}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
