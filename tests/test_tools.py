@@ -74,3 +74,11 @@ def test_eta_tool_reports_the_error(capsys, tool):
     tool("eta").main(["--names", "porous80", "--shape", "16", "--set", "neighborhood=5", "--set", "scales=2"])
     out = capsys.readouterr().out
     assert "porous80:" in out and "ETA error after the first:" in out and " %" in out
+
+
+def test_prune_check_tool_compares_the_pruned_lcpdf(capsys, tool):
+    tool("prune_check").main(["--names", "porous80", "--shape", "16", "--voxels", "50", "--counts", "4", "9999",
+                              "--set", "neighborhood=5", "--set", "scales=2", "--temperature", "0.9"])
+    out = capsys.readouterr().out
+    assert "porous80" in out and "nearest    4: TV" in out
+    assert "nearest 9999: TV 0.000 (99 %: 0.000), same level 100.0%" in out  # more than the sites: the exact sum
