@@ -5,7 +5,8 @@ Analysis: every exemplar site gets a candidate set, itself and its ``candidates 
 nearest other sites (full neighbourhood, centre included;
 :func:`~clsolid.search.match.candidate_sets`).
 
-At a voxel, per view: the exact best match p of the neighbourhood (centre left out), then
+At a voxel, per view: the best match p of the neighbourhood (centre left out; exhaustive,
+or k-coherence with ``search="coherence"``), then
 among p's candidate set the candidate c of least ``(||N(v) - N(c)|| + eps) * w_index(c)``
 (the L2 distance, the thesis's eq. 3.8), with
 
