@@ -30,12 +30,15 @@ def logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
 
 
 def wrapped_coords(voxels: np.ndarray, shape, offsets: np.ndarray) -> tuple:
-    """Flat indices of ``voxels + offsets`` on the torus: returns an ``(m, R)`` array."""
-    z, y, x = np.unravel_index(voxels, shape)
-    zz = (z[:, None] + offsets[None, :, 0]) % shape[0]
-    yy = (y[:, None] + offsets[None, :, 1]) % shape[1]
-    xx = (x[:, None] + offsets[None, :, 2]) % shape[2]
-    return np.ravel_multi_index((zz, yy, xx), shape)
+    """Flat indices of ``voxels + offsets`` on the torus: returns an ``(m, R)`` array.
+
+    Each axis has few distinct offsets: they are wrapped once per voxel, then gathered."""
+    stride = (shape[1] * shape[2], shape[2], 1)
+    flat = np.zeros((np.size(voxels), offsets.shape[0]), np.int64)
+    for axis, c in enumerate(np.unravel_index(voxels, shape)):
+        values, which = np.unique(offsets[:, axis], return_inverse=True)
+        flat += (((c[:, None] + values) % shape[axis]) * stride[axis])[:, which.ravel()]
+    return flat
 
 
 def log_lcpdf(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels: np.ndarray, view: int) -> np.ndarray:
