@@ -49,12 +49,13 @@ class SynthesisResult:
     volume : ndarray
         ``(Z, Y, X)`` in the exemplar's own units and dtype: the exemplar's own values
         when it holds at most ``levels`` of them, else each level's mean value
-        (see :func:`clsolid.exemplar.level_map`); for ``method="wl"``, float64 means of
-        those values.
+        (see :func:`clsolid.exemplar.level_map`); for the search methods, float64: means
+        of those values (``wl``, ``kopf`` on grey exemplars) or the values themselves
+        (``chen-wang``; ``kopf`` on categorical ones).
     labels : ndarray or None
         The same volume as level indices in ``[0, level_values.size)`` (uint8, or uint16
-        above 256 levels): what the engine works on. None for ``method="wl"``, whose
-        voxels are means of exemplar values, not levels.
+        above 256 levels): what the engine works on. None for the search methods, whose
+        voxels are exemplar values or their means, not levels.
     exemplar : ndarray
         The exemplar as the engine saw it, in its own units (each pixel replaced by its
         level's value; identical to the input when ``values_exact``).
