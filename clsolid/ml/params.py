@@ -6,6 +6,7 @@ import math
 import numbers
 from dataclasses import asdict, dataclass, field
 
+from ..core.checks import int_in, one_of
 from ..core.views import DEPTH_AXIS, VIEW_AXES, VIEW_SETS  # noqa: F401 (this method's names too)
 from ..errors import InputError
 
@@ -65,23 +66,8 @@ def canonical_heuristic(name: str) -> str:
     return _ALIASES[name.lower()]
 
 
-def _int_in(name: str, value, lo: int, hi: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise InputError(f"{name}={value!r} must be an integer")
-    if value < lo or (hi is not None and value > hi):
-        rng = f">= {lo}" if hi is None else f"in [{lo}, {hi}]"
-        raise InputError(f"{name}={value!r} must be {rng}")
-    return int(value)
-
-
 def _real(value) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
-
-
-def _choice(name: str, value, options: tuple[str, ...]) -> str:
-    if value not in options:
-        raise InputError(f"{name}={value!r} must be one of {', '.join(map(repr, options))}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -115,28 +101,28 @@ class MLParams:
     balance: float = 1.0
 
     def __post_init__(self):
-        k = _int_in("neighborhood", self.neighborhood, 3, 31)
+        k = int_in("neighborhood", self.neighborhood, 3, 31)
         if k % 2 == 0:
             raise InputError(f"neighborhood={k} must be odd (a full square k x k centred on the voxel)")
-        _int_in("scales", self.scales, 1, 8)
-        _choice("pyramid", self.pyramid, PYRAMIDS)
+        int_in("scales", self.scales, 1, 8)
+        one_of("pyramid", self.pyramid, PYRAMIDS)
         if self.views not in VIEW_SETS:
             raise InputError(f"views={self.views!r} must be 2 (front + right) or 3 (front + right + top)")
         if self.levels is not None:
-            _int_in("levels", self.levels, 2, 65536)
+            int_in("levels", self.levels, 2, 65536)
         object.__setattr__(self, "heuristic", canonical_heuristic(self.heuristic))
         if not (isinstance(self.xi, numbers.Real) and math.isfinite(self.xi) and self.xi < 0):
             raise InputError(f"xi={self.xi!r} must be a finite negative number (thesis default -3)")
         if not (isinstance(self.stop_fraction, numbers.Real) and 0 < self.stop_fraction <= 1):
             raise InputError(f"stop_fraction={self.stop_fraction!r} must be in (0, 1] (1 = until zero)")
-        _int_in("max_sweeps", self.max_sweeps, 1)
-        _choice("inherited", self.inherited, INHERITED)
+        int_in("max_sweeps", self.max_sweeps, 1)
+        one_of("inherited", self.inherited, INHERITED)
         if self.insert_slices is not None:
-            _int_in("insert_slices", self.insert_slices, 0)
+            int_in("insert_slices", self.insert_slices, 0)
         if not (_real(self.insert_spacing) and self.insert_spacing >= 1):
             raise InputError(f"insert_spacing={self.insert_spacing!r} must be a number >= 1 (voxels between "
                              "a view's +in slices); insert_slices=0 gives no slices")
-        _choice("slice_layout", self.slice_layout, SLICE_LAYOUTS)
+        one_of("slice_layout", self.slice_layout, SLICE_LAYOUTS)
         t0 = self.initial_temperature
         if not (isinstance(t0, numbers.Real) and 0 < t0 <= 1):
             raise InputError(f"initial_temperature={t0!r} must be in (0, 1] (1 = no confidence, the thesis)")
@@ -148,10 +134,10 @@ class MLParams:
             object.__setattr__(self, "bandwidth_factor", self._per_scale("bandwidth_factor", self.bandwidth_factor))
         else:
             object.__setattr__(self, "bandwidth_factor", (DEFAULT_BANDWIDTH_FACTOR,) * self.scales)
-        _choice("relaxation", self.relaxation, RELAXATIONS)
+        one_of("relaxation", self.relaxation, RELAXATIONS)
         if self.upsampling is None:  # 1/8 for ICM (thesis §5.3.3), 8/8 for annealing (TIP14)
             object.__setattr__(self, "upsampling", "8/8" if self.relaxation == "annealing" else "1/8")
-        _choice("upsampling", self.upsampling, UPSAMPLING)
+        one_of("upsampling", self.upsampling, UPSAMPLING)
         if not (_real(self.anneal_start) and self.anneal_start > 0):
             raise InputError(f"anneal_start={self.anneal_start!r} must be a positive number "
                              "(the initial t_in; 1 = Metropolis on the LCPDF)")
@@ -159,7 +145,7 @@ class MLParams:
             raise InputError(f"anneal_cooling={self.anneal_cooling!r} must be in (0, 1) "
                              "(t_in is multiplied by it after every sweep)")
         if self.sweeps is not None:
-            _int_in("sweeps", self.sweeps, 1)
+            int_in("sweeps", self.sweeps, 1)
         if not (_real(self.balance) and 0 <= self.balance <= 1):
             raise InputError(f"balance={self.balance!r} must be a number in [0, 1] "
                              "(0 = off, 1 = the exemplar's label fractions exactly)")

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-import numbers
 from dataclasses import asdict, dataclass
 
+from ..core.checks import int_in, one_of
 from ..core.orders import ORDERS
 from ..core.views import VIEW_SETS
 from ..errors import InputError
@@ -29,12 +29,6 @@ HISTOGRAMS = ("global", "slice")
 SEARCHES = ("exact", "coherence")
 #: chen-wang's candidate set size (thesis §5.2.1, §6.3.3).
 DEFAULT_CANDIDATES = 15
-
-
-def _int_in(name: str, value, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not lo <= value <= hi:
-        raise InputError(f"{name}={value!r} must be an integer in [{lo}, {hi}]")
-    return int(value)
 
 
 @dataclass(frozen=True)
@@ -117,32 +111,26 @@ class SearchParams:
     search: str = "exact"
 
     def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise InputError(f"method={self.method!r} must be one of {', '.join(map(repr, METHODS))}")
+        one_of("method", self.method, METHODS)
         check_side(self.neighborhood)
-        _int_in("scales", self.scales, 1, 8)
-        _int_in("iterations", self.iterations, 1, 1000)
-        _int_in("inner", self.inner, 1, 100)
+        int_in("scales", self.scales, 1, 8)
+        int_in("iterations", self.iterations, 1, 1000)
+        int_in("inner", self.inner, 1, 100)
         if self.views not in VIEW_SETS:
             raise InputError(f"views={self.views!r} must be 2 (front + right) or 3 (front + right + top)")
-        if self.init not in INITS:
-            raise InputError(f"init={self.init!r} must be one of {', '.join(map(repr, INITS))}")
-        if self.rule not in RULES:
-            raise InputError(f"rule={self.rule!r} must be one of {', '.join(map(repr, RULES))}")
+        one_of("init", self.init, INITS)
+        one_of("rule", self.rule, RULES)
         if self.rule != "centres" and self.method != "kopf":
             raise InputError(f"rule={self.rule!r} is kopf's; method {self.method!r} has only 'centres'")
-        if self.order not in ORDERS_ALL:
-            raise InputError(f"order={self.order!r} must be one of {', '.join(map(repr, ORDERS_ALL))}")
+        one_of("order", self.order, ORDERS_ALL)
         if self.order != "sets" and self.rule == "overlap":
             raise InputError("rule='overlap' matches and updates the whole block at once: it has no visiting "
                              "order (use order='sets')")
-        if self.histogram not in HISTOGRAMS:
-            raise InputError(f"histogram={self.histogram!r} must be one of {', '.join(map(repr, HISTOGRAMS))}")
+        one_of("histogram", self.histogram, HISTOGRAMS)
         if self.histogram != "global" and self.method != "kopf":
             raise InputError(f"histogram={self.histogram!r} is kopf's re-weighting; method {self.method!r} has none")
-        if self.search not in SEARCHES:
-            raise InputError(f"search={self.search!r} must be one of {', '.join(map(repr, SEARCHES))}")
-        _int_in("candidates", self.candidates, 1, MAX_K)
+        one_of("search", self.search, SEARCHES)
+        int_in("candidates", self.candidates, 1, MAX_K)
         if self.candidates != DEFAULT_CANDIDATES and self.method != "chen-wang":
             raise InputError(f"candidates={self.candidates!r} is chen-wang's candidate set; method "
                              f"{self.method!r} has none")
