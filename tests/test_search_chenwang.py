@@ -149,3 +149,14 @@ def test_cli_writes_the_source_map(tmp_path, device):
 def test_cli_refuses_a_misplaced_source_map_or_candidates(tmp_path, argv, word, capsys):
     assert main(["synth", "brick", "-o", str(tmp_path / "v.npy"), "--shape", "8", "8", "8", *argv]) != 0
     assert word in capsys.readouterr().err
+
+
+def test_a_smaller_candidate_set_is_a_larger_ones_first_columns():
+    """The driver computes one set for chen-wang and the coherence search and slices it."""
+    ex = np.zeros((14, 14))
+    ex[::4, ::3] = 255  # many equal squares: ties decide the order
+    table, _ = exemplar_table(ex, 3)
+    matcher, w = ReferenceMatcher(table), np.ones(9, np.float32)
+    big = candidate_sets(matcher, table, 15, w)
+    for count in (1, 4, 7):
+        np.testing.assert_array_equal(candidate_sets(matcher, table, count, w), big[:, :count])

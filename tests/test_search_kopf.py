@@ -106,7 +106,7 @@ def test_overlap_support_matches_explicit_loops(name):
     level = Level(params=params, matcher=ReferenceMatcher(table), centres=centres,
                   patches=table[:, : k * k].astype(np.float64), values=np.unique(ex),
                   w_first=centre_weights(k, False, centre=False), w_again=centre_weights(k, False, centre=True),
-                  histogram=LevelHistogram(ex, ex, vol))
+                  span=float(ex.max() - ex.min()), histogram=LevelHistogram(ex, ex, vol))
     phases, num, den, searches = overlap_support(level, vol, None)
     slow = _slow_support(level, vol, None)
     assert searches == 2 * vol.size and (phases is None) == (name == "gravel")

@@ -27,7 +27,7 @@ import clsolid
 from clsolid.gallery import gallery_exemplar
 from clsolid.ml.model import build_scale
 from clsolid.ml.params import MLParams
-from clsolid.ml.reference import logsumexp, normalise, wrapped_coords
+from clsolid.ml.reference import normalise, parzen, wrapped_coords
 
 
 def site_terms(model, vol: np.ndarray, voxels: np.ndarray, view: int, temperature: float) -> np.ndarray:
@@ -38,16 +38,6 @@ def site_terms(model, vol: np.ndarray, voxels: np.ndarray, view: int, temperatur
     p = model.patches  # (R, n)
     a = (x**2).sum(axis=1)[:, None] - 2.0 * x @ p + (p**2).sum(axis=0)[None, :]
     return (1.0 - temperature) ** 2 * np.maximum(a, 0.0)
-
-
-def lcpdf(model, a: np.ndarray, keep: np.ndarray | None) -> np.ndarray:
-    """Normalised log LCPDF ``(m, labels)`` from the site terms *a*, over every site or only
-    where *keep* ``(m, n)`` is True."""
-    dist = (model.labels[None, :, None] - model.centres[None, None, :]) ** 2 + a[:, None, :]
-    logw = -dist / (2.0 * model.bandwidth**2)
-    if keep is not None:
-        logw = np.where(keep[:, None, :], logw, -np.inf)
-    return normalise(logsumexp(logw, axis=2))
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -86,11 +76,11 @@ def main(argv: list[str] | None = None) -> None:
             same = {k: [] for k in args.counts}
             for part in np.array_split(voxels, max(1, voxels.size // 200)):  # (200, labels, sites) at a time
                 a = site_terms(model, vol, part, view, args.temperature)
-                p_exact = np.exp(lcpdf(model, a, None))
+                p_exact = np.exp(normalise(parzen(model, a)))
                 for k in args.counts:
                     keep = np.zeros_like(a, bool)
                     np.put_along_axis(keep, np.argpartition(a, min(k, n - 1), axis=1)[:, :k], True, axis=1)
-                    p = np.exp(lcpdf(model, a, keep))
+                    p = np.exp(normalise(parzen(model, a, keep)))
                     tv[k].append(0.5 * np.abs(p - p_exact).sum(axis=1))
                     same[k].append(p.argmax(1) == p_exact.argmax(1))
             for k in args.counts:

@@ -29,7 +29,7 @@ def logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
     return np.squeeze(m, axis) + np.log(np.sum(np.exp(a - m), axis=axis))
 
 
-def wrapped_coords(voxels: np.ndarray, shape, offsets: np.ndarray) -> tuple:
+def wrapped_coords(voxels: np.ndarray, shape, offsets: np.ndarray) -> np.ndarray:
     """Flat indices of ``voxels + offsets`` on the torus: returns an ``(m, R)`` array.
 
     Each axis has few distinct offsets: they are wrapped once per voxel, then gathered."""
@@ -47,9 +47,18 @@ def log_lcpdf(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels: np.n
     x = vol.ravel()[nb].astype(np.float64)
     w = 1.0 - temp.ravel()[nb].astype(np.float64)
     diff = w[:, :, None] * (x[:, :, None] - model.patches[None, :, :])  # (m, R, n)
-    a = np.sum(diff**2, axis=1)  # (m, n)
+    return parzen(model, np.sum(diff**2, axis=1))
+
+
+def parzen(model: ScaleModel, a: np.ndarray, keep: np.ndarray | None = None) -> np.ndarray:
+    """Unnormalised ``log f_v(lambda)`` ``(m, |Lambda|)`` from each voxel's weighted squared
+    neighbourhood distance to every site, *a* ``(m, n)``: the Parzen sum over the sites, or
+    over those where *keep* ``(m, n)`` is True."""
     dist = (model.labels[None, :, None] - model.centres[None, None, :]) ** 2 + a[:, None, :]
-    return logsumexp(-dist / (2.0 * model.bandwidth**2), axis=2)
+    logw = -dist / (2.0 * model.bandwidth**2)
+    if keep is not None:
+        logw = np.where(keep[:, None, :], logw, -np.inf)
+    return logsumexp(logw, axis=2)
 
 
 def normalise(logf: np.ndarray) -> np.ndarray:

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .features import voxel_features
-from .kopf import EPS_REL, robust_weights
+from .kopf import robust_norm, robust_weights
 from .level import Level
 
 
@@ -97,8 +97,7 @@ def choose(level: Level, queries: np.ndarray, best: np.ndarray) -> tuple[np.ndar
     src = level.sources
     cand = src.candidates[best]  # (m, count)
     dist = level.matcher.distances(queries, cand, level.w_first).astype(np.float64)
-    norm = np.sqrt(np.maximum(dist, 0.0)) + EPS_REL * level.histogram.span
-    j = np.argmin(norm * excess_factor(src.index[cand], src.phi), axis=1)
+    j = np.argmin(robust_norm(dist, level.span) * excess_factor(src.index[cand], src.phi), axis=1)
     rows = np.arange(cand.shape[0])
     return cand[rows, j], dist[rows, j]
 
@@ -112,7 +111,7 @@ def solve(values: np.ndarray, weights: np.ndarray) -> np.ndarray:
 
 def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray) -> int:
     """One conflict-free set: search, choose among candidates, weigh, solve. Returns the
-    exact searches made."""
+    searches made."""
     src, k = level.sources, level.params.neighborhood
     n_views = len(level.params.view_names)
     chosen = np.empty((n_views, voxels.size), np.int64)
@@ -124,12 +123,9 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
         _recount(src.index, src.chosen[i, voxels], chosen[i])  # the next view sees this one's choices
         src.chosen[i, voxels] = chosen[i]
     values = level.centres[chosen]
-    weights = robust_weights(dist, level.histogram.span) / excess_factor(src.position[chosen], src.theta)
+    weights = robust_weights(dist, level.span) / excess_factor(src.position[chosen], src.theta)
     new = chosen[solve(values, weights), np.arange(voxels.size)]
     _recount(src.position, src.source[voxels], new)
     src.source[voxels] = new
-    flat = vol.reshape(-1)
-    old = flat[voxels].copy()
-    flat[voxels] = level.centres[new]
-    level.histogram.replace(old, flat[voxels], voxels)
+    vol.reshape(-1)[voxels] = level.centres[new]
     return chosen.size

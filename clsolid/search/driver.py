@@ -30,9 +30,6 @@ from .pyramid import gaussian_pyramid
 
 #: Each method's rule for one conflict-free set: ``update(level, vol, coarse, voxels) -> searches``.
 UPDATES = {"wl": wl.update, "kopf": kopf.update, "chen-wang": chenwang.update}
-#: The methods that keep the grey-level histogram of the block (kopf re-weights by it;
-#: chen-wang takes the scale of Kopf's eps from it).
-_HISTOGRAM = ("kopf", "chen-wang")
 
 
 class SearchOutput(NamedTuple):
@@ -131,22 +128,26 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
 def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape: tuple[int, int] | None,
            table: np.ndarray, centres: np.ndarray, vol: np.ndarray, matcher: Any,
            coarser: coherence.Coherence | None) -> Level:
-    """One level's :class:`Level`: weights, and what the method and search keep (the
-    grey-level histogram; chen-wang's candidate sets and histograms; the coherence state,
-    started from the *coarser* level's)."""
+    """One level's :class:`Level`: weights, and what the method and search keep: kopf's
+    grey-level histogram, chen-wang's candidate sets and histograms, the coherence state
+    (started from the *coarser* level's)."""
     k, use_parent = params.neighborhood, parent_shape is not None
     ctx = Level(params=params, matcher=matcher, centres=centres,
                 patches=table[:, : k * k].astype(np.float64), values=np.unique(pyr[level]),
                 w_first=centre_weights(k, use_parent, centre=False, causal=params.causal),
-                w_again=centre_weights(k, use_parent, centre=True, causal=params.causal))
-    if params.method in _HISTOGRAM:
+                w_again=centre_weights(k, use_parent, centre=True, causal=params.causal),
+                span=float(np.ptp(pyr[0])) or 1.0)
+    if params.method == "kopf":
         ctx.histogram = LevelHistogram(pyr[0], pyr[level], vol, params.view_names if params.histogram == "slice" else ())
-    if params.method == "chen-wang":
-        cands = candidate_sets(matcher, table, params.candidates, ctx.w_again)
-        ctx.sources = chenwang.Sources.start(cands, vol.size, len(params.view_names))
-    if params.search == "coherence":
+    n_cw = params.candidates if params.method == "chen-wang" else 0
+    n_coh = coherence.SIMILAR if params.search == "coherence" else 0
+    if n_cw or n_coh:  # one search serves both: a smaller set is a larger one's first columns
+        sets = candidate_sets(matcher, table, max(n_cw, n_coh), ctx.w_again)
+    if n_cw:
+        ctx.sources = chenwang.Sources.start(sets[:, :n_cw], vol.size, len(params.view_names))
+    if n_coh:
         rows, cols = valid_sites(pyr[level].shape, parent_shape, k)
-        similar = candidate_sets(matcher, table, coherence.SIMILAR, ctx.w_again)
+        similar = sets[:, :n_coh]
         ctx.coherence = coherence.Coherence(rows, cols, pyr[level].shape, similar, vol.shape, params.view_names)
         if coarser is not None:
             ctx.coherence.inherit(coarser)

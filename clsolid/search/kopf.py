@@ -43,9 +43,15 @@ SHARPNESS = 16.0
 MAX_PHASES = 8
 
 
+def robust_norm(ssd: np.ndarray, span: float) -> np.ndarray:
+    """``||.|| + eps`` of squared distances *ssd*: the L2 norm, kept off 0 by eps (a
+    thousandth of the exemplar's range *span*)."""
+    return np.sqrt(np.maximum(ssd, 0.0)) + EPS_REL * span
+
+
 def robust_weights(ssd: np.ndarray, span: float) -> np.ndarray:
     """Kopf's IRLS weight ``(||.|| + eps)^(r - 2)`` of squared distances *ssd*."""
-    return (np.sqrt(np.maximum(ssd, 0.0)) + EPS_REL * span) ** (R - 2.0)
+    return robust_norm(ssd, span) ** (R - 2.0)
 
 
 def histogram_factor(level: Level, bins: np.ndarray, view: str | None = None,
@@ -72,7 +78,7 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
     bins = hist.bin(values).reshape(values.shape)
     factor = np.stack([histogram_factor(level, bins[i], view, voxels)
                        for i, view in enumerate(level.params.view_names)])
-    w = robust_weights(ssd, hist.span) * factor
+    w = robust_weights(ssd, level.span) * factor
     flat = vol.reshape(-1)
     old = flat[voxels].copy()
     if hist.values.size <= MAX_PHASES:
@@ -118,7 +124,7 @@ def overlap_support(level: Level, vol: np.ndarray,
     every = np.arange(vol.size)
     sites, ssd = matches(level, vol, coarse, every, level.w_first)  # (views, n)
     hist = level.histogram
-    w = robust_weights(ssd, hist.span)
+    w = robust_weights(ssd, level.span)
     patch_bins = hist.bin(level.patches).reshape(level.patches.shape)  # once a pass, not once a proposal
     # Coarser levels of a categorical exemplar's pyramid are blends: they take the mean.
     phases = level.values if level.values.size <= MAX_PHASES else None

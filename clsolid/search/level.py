@@ -44,11 +44,6 @@ class LevelHistogram:
         return np.unravel_index(voxels, self.shape)[DEPTH_AXIS[view]]
 
     @property
-    def span(self) -> float:
-        """The range of the bins' values (1 for a single value), the scale of kopf's ``eps``."""
-        return float(self.values[-1] - self.values[0]) or 1.0
-
-    @property
     def volume(self) -> np.ndarray:
         """The block's histogram, as fractions."""
         return self.counts / self.total
@@ -75,7 +70,8 @@ class Level:
     """One level's matcher and tables: ``centres[s]`` is site s's centre value and
     ``patches[s]`` its k x k square, row by row; ``values`` the level image's distinct
     values; the first search of a voxel weighs its terms by ``w_first`` (centre left out),
-    repeated ones by ``w_again``; ``histogram`` for ``kopf`` and ``chen-wang``, ``sources``
+    repeated ones by ``w_again``; ``span`` is the finest exemplar's range (1 if constant),
+    the scale of Kopf's ``eps``; ``histogram`` for ``kopf``, ``sources``
     (:class:`~clsolid.search.chenwang.Sources`) for ``chen-wang``, ``coherence``
     (:class:`~clsolid.search.coherence.Coherence`) for the accelerated search."""
 
@@ -86,6 +82,7 @@ class Level:
     values: np.ndarray
     w_first: np.ndarray
     w_again: np.ndarray
+    span: float
     histogram: LevelHistogram | None = None
     sources: Any = None
     coherence: Any = None

@@ -163,7 +163,8 @@ def candidate_sets(matcher: Any, table: np.ndarray, count: int, weights: np.ndar
 
     "Each pixel is considered to belong to his own set": among equal neighbourhoods (the
     flat squares of a binary exemplar) the nearest by index need not include the site
-    itself, so it is put first and the nearest others follow.
+    itself, so it is put first and the nearest others follow. The sets of a smaller count
+    are the first columns of a larger count's.
     """
     n_sites = table.shape[0]
     count = min(count, n_sites)
