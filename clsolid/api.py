@@ -26,7 +26,8 @@ DEFAULT_NEIGHBORHOOD = {"ml": 9, "wl": 7, "kopf": 7, "chen-wang": 7}
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
                "insert_spacing",
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
-               "anneal_start", "anneal_cooling", "sweeps", "balance")
+               "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "prune_similar",
+               "prune_sample", "prune_min_weight")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
 _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
@@ -214,6 +215,18 @@ def synthesize(
         far from the unbiased fractions. Exact in expectation for Gibbs draws; ICM and
         annealing decide otherwise than by a draw, and keep the fractions less closely.
 
+        Likelihood (issue 12): ``likelihood="exact"`` sums the Parzen window over every
+        exemplar site; ``"pruned"`` over k-coherence candidates (the sources, nearest
+        sites at the last visit, of the voxel and its 8 in-slice neighbours, shifted, and the
+        ``prune_similar`` (8) windows most like each; identical windows count by their
+        number), plus an unbiased estimate of the rest from ``prune_sample`` (64) sites
+        drawn systematically; a neighbourhood whose mean (1 - t)^2 is below
+        ``prune_min_weight`` (default 0: none) gets the exact sum (``clsolid.ml.pruned``).
+        Accurate on categorical exemplars, approximate on grey ones (README, Performance), so
+        ``"auto"`` (default) prunes categorical exemplars (binary or segmented: their own
+        values kept, at most 8 of them) and sums grey ones exactly; the result's ``params``
+        say which it took.
+
     Returns
     -------
     ndarray or SynthesisResult
@@ -249,6 +262,7 @@ def synthesize(
     params = MLParams(neighborhood=neighborhood, scales=scales, views=views, levels=levels,
                       heuristic="h2-product" if heuristic is None else heuristic, **{k: options[k] for k in _ML_OPTIONS if k in options})
     image, levels_of, seed = _load(exemplar, levels, rng, options)
+    params = params.for_exemplar(levels_of.values.size, levels_of.exact)
     backend = make_backend(device, {k: options[k] for k in _BACKEND_OPTIONS if k in options})
     hook = None
     if options.get("checkpoint") is not None:

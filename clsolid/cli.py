@@ -16,7 +16,7 @@ from pathlib import Path
 
 from .core.views import DEPTH_AXIS, VIEW_SETS
 from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
-from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, RELAXATIONS, SLICE_LAYOUTS,
+from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, LIKELIHOODS, RELAXATIONS, SLICE_LAYOUTS,
                      UPSAMPLING, MLParams)
 from .presets import PRESETS, Preset, get_preset
 from .search.params import DEFAULT_CANDIDATES, HISTOGRAMS, ORDERS_ALL, RULES, SEARCHES
@@ -134,6 +134,17 @@ def _add_synth(sub) -> None:
     p.add_argument("--balance", type=float, default=d.balance,
                    help="label-histogram balance in [0, 1]: each sweep aims that far from the unbiased "
                         "fractions towards the exemplar's (default %(default)s = exactly; 0 = off, the thesis)")
+    p.add_argument("--likelihood", choices=LIKELIHOODS, default=d.likelihood,
+                   help="the Parzen sum over every exemplar site (exact, the thesis) or over k-coherence "
+                        "candidates plus a sample of the other sites (pruned); auto (default): pruned for "
+                        "categorical exemplars (at most 8 values, kept), exact for grey ones")
+    p.add_argument("--prune-similar", type=int, default=d.prune_similar,
+                   help="pruned: windows taken per source, itself included (default %(default)s)")
+    p.add_argument("--prune-sample", type=int, default=d.prune_sample,
+                   help="pruned: sites sampled to estimate the rest of the sum (default %(default)s)")
+    p.add_argument("--prune-min-weight", type=float, default=d.prune_min_weight,
+                   help="pruned: a neighbourhood whose mean (1 - t)^2 is below this gets the exact sum "
+                        "(default %(default)s: never)")
     p.add_argument("--checkpoint", type=Path, default=None,
                    help="ml: save the run's state in this folder after every sweep (see --checkpoint-every), "
                         "so that --resume can go on after a crash or Ctrl-C")
@@ -256,7 +267,8 @@ def _tracker(levels: int, records: list):
 #: Flags that only one method reads: given to the other, they are an error, not ignored.
 _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited",
             "insert_slices", "insert_spacing", "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor",
-            "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "indices", "track")
+            "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "prune_similar",
+            "prune_sample", "prune_min_weight", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram", "candidates",
             "search", "site_map", "source_map")
 
@@ -295,7 +307,9 @@ def _ml_options(args) -> dict:
                    slice_layout=args.slice_layout,
                    initial_temperature=args.initial_temperature, builtin_size=args.builtin_size,
                    relaxation=args.relaxation, anneal_start=args.anneal_start, anneal_cooling=args.anneal_cooling,
-                   sweeps=args.sweeps, balance=args.balance)
+                   sweeps=args.sweeps, balance=args.balance, likelihood=args.likelihood,
+                   prune_similar=args.prune_similar, prune_sample=args.prune_sample,
+                   prune_min_weight=args.prune_min_weight)
     for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale
         values = getattr(args, name)
         if values is not None:

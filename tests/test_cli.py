@@ -69,6 +69,9 @@ def test_same_seed_same_file(tmp_path, device):
     (["--bandwidth", "3"], "bandwidth", [3.0, 3.0]),
     ([], "pyramid", "binomial"),
     (["--pyramid", "decimate"], "pyramid", "decimate"),
+    ([], "likelihood", "exact"),  # brick is grey: auto sums exactly
+    (["--likelihood", "pruned", "--prune-similar", "4", "--prune-sample", "32", "--prune-min-weight", "0.1"],
+     "likelihood", "pruned"),
 ])
 def test_method_options_reach_the_sidecar(tmp_path, device, argv, key, expected):
     assert main(["synth", "-o", str(tmp_path / "v.npy"), *FAST, "-q", *argv]) == 0
@@ -76,6 +79,8 @@ def test_method_options_reach_the_sidecar(tmp_path, device, argv, key, expected)
     assert params[key] == (expected if isinstance(expected, str) else pytest.approx(expected))
     if key == "bandwidth":
         assert params["bandwidth_effective"] == pytest.approx(expected)
+    if "--prune-similar" in argv:
+        assert (params["prune_similar"], params["prune_sample"], params["prune_min_weight"]) == (4, 32, 0.1)
 
 
 def test_quiet_is_quiet(tmp_path, capsys, device):

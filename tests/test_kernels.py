@@ -53,8 +53,12 @@ def test_no_underflow_for_11x11_and_256_levels(device):
 
 def test_group_tables_cover_every_site_once(small_labels):
     model = build_scale(small_labels, (8, 8, 8), MLParams(neighborhood=5, scales=1), 0)
-    patches, chunk_group, chunk_valid, values = group_tables(model, 16)
+    patches, chunk_group, chunk_valid, values, chunk_site = group_tables(model, 16)
     assert chunk_valid.sum() == model.n_sites
+    real = (np.arange(16)[None, :] < chunk_valid[:, None]).ravel()
+    np.testing.assert_array_equal(np.sort(chunk_site[real]), np.arange(model.n_sites))  # each site's lane
+    np.testing.assert_array_equal(patches.transpose(0, 2, 1).reshape(-1, patches.shape[1])[real],
+                                  model.patches.T[chunk_site[real]])
     np.testing.assert_array_equal(values, np.unique(model.centres))
     # the real lanes of every group's chunks hold exactly that group's sites
     for g, v in enumerate(values):

@@ -82,3 +82,17 @@ def test_prune_check_tool_compares_the_pruned_lcpdf(capsys, tool):
     out = capsys.readouterr().out
     assert "porous80" in out and "nearest    4: TV" in out
     assert "nearest 9999: TV 0.000 (99 %: 0.000), same level 100.0%" in out  # more than the sites: the exact sum
+
+
+def test_prune_error_reports_every_sweep(capsys, device, tool):
+    tool("prune_error").main(["--names", "porous50", "--shape", "12", "--sample", "20", "--set", "scales=2",
+                              "--device", device.device.name.strip()[:8]])
+    out = capsys.readouterr().out
+    assert "porous50:" in out and "pruned" in out and "scale 0 sweep 1:" in out
+
+
+def test_bench_scale_prints_a_row_per_run(capsys, device, tool):
+    tool("bench_scale").main(["--cases", "64:8", "--names", "porous50", "--device",
+                              device.device.name.strip()[:8]])
+    out = capsys.readouterr().out
+    assert "GFLOP/s" in out and "| porous50 | 64² → 8³ | exact |" in out and "| porous50 | 64² → 8³ | pruned |" in out

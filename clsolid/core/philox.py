@@ -18,8 +18,9 @@ _LO = np.uint64(0xFFFFFFFF)
 #: Tags that separate the streams drawn for different purposes. The random start uses
 #: TAG_INIT; the stochastic relaxations use :func:`relax_tag`, which never equals it.
 TAG_INIT = 0
-#: Purpose field (bits 28-31) of the relaxation tags.
+#: Purpose field (bits 28-31) of the relaxation tags, and of the pruned likelihood's sample.
 PURPOSE_RELAX = 1
+PURPOSE_SAMPLE = 2
 
 
 def relax_tag(level: int, sweep: int) -> int:
@@ -32,6 +33,12 @@ def relax_tag(level: int, sweep: int) -> int:
     if not (0 <= level < 256 and 0 <= sweep < 1 << 20):
         raise ValueError(f"level={level} or sweep={sweep} out of the tag's range")
     return (PURPOSE_RELAX << 28) | (level << 20) | sweep
+
+
+def sample_tag(tag: int) -> int:
+    """The tag of the pruned likelihood's site sample in the sweep of relaxation tag *tag*:
+    the same level and sweep, purpose :data:`PURPOSE_SAMPLE`."""
+    return (PURPOSE_SAMPLE << 28) | (tag & 0x0FFFFFFF)
 
 
 def philox4x32(counter: np.ndarray, key: np.ndarray, rounds: int = 10) -> np.ndarray:

@@ -59,4 +59,7 @@ def load_run(folder: str | os.PathLike) -> tuple[dict[str, Any], MLParams, np.nd
         raise CheckpointError(f"{folder} lacks {sorted(missing) or 'part of its description'}: the checkpoint "
                               "is corrupt")
     params = MLParams.from_dict(meta["params"])
+    if params.likelihood == "pruned" and "sources" not in arrays:
+        raise CheckpointError(f"{folder} is of a likelihood='pruned' run but holds no sources: the checkpoint "
+                              "is corrupt")
     return meta, params, arrays["exemplar"], RunState.from_arrays(arrays, meta["timings"])

@@ -187,12 +187,20 @@ class _Clock:
     still to come are estimated from their size.
     """
 
-    def __init__(self, models: list[ScaleModel]):
+    def __init__(self, models: list[ScaleModel], params: MLParams):
         self.t0 = time.perf_counter()
-        # Work of a full sweep at each scale: voxels x exemplar sites x window terms.
-        self.work = [np.prod(m.shape) * m.n_sites * m.patches.shape[0] for m in models]
+        self.params = params
+        # Work of a full sweep at each scale: voxels x exemplar sites summed x window terms.
+        self.work = [np.prod(m.shape) * self._unit(m) for m in models]
         self.rate: float | None = None  # seconds per unit of work, measured
         self.visits: dict[int, int] = {}  # this scale's forecast: sweep -> voxels it visits
+
+    def _unit(self, model: ScaleModel) -> int:
+        """Terms per voxel visit: every site's window, or, pruned, at most the candidates and the sample."""
+        sites = model.n_sites
+        if self.params.likelihood == "pruned":
+            sites = min(sites, 9 * self.params.prune_similar + self.params.prune_sample)
+        return sites * model.patches.shape[0]
 
     def plan(self, first: int, visits: list[int]) -> None:
         """The forecast visits of this scale's sweeps from *first* on."""
@@ -214,7 +222,7 @@ class _Clock:
 
     def eta(self, i: int, sweep: int, sweep_s: float, visited: int, model: ScaleModel, t: float, t_prev: float,
             target: float, sweeps_left: int) -> float:
-        unit = model.n_sites * model.patches.shape[0]
+        unit = self._unit(model)
         if visited:
             self.rate = sweep_s / (visited * unit)
         if self.rate is None:
@@ -249,19 +257,23 @@ class RunState:
     t_now: float
     bias: np.ndarray
     timings: dict
+    sources: np.ndarray | None = None  # the pruned likelihood's per-view sources (None: exact)
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The state as named arrays (for :func:`clsolid.core.checkpoint.write_checkpoint`)."""
-        return {"volume": self.volume, "temperature": self.temperature, "inherited": self.inherited,
-                "bias": self.bias, "scalars": np.array([self.t_init, self.target, self.t_now]),
-                "position": np.array([self.scale, self.sweep, int(self.done)])}
+        out = {"volume": self.volume, "temperature": self.temperature, "inherited": self.inherited,
+               "bias": self.bias, "scalars": np.array([self.t_init, self.target, self.t_now]),
+               "position": np.array([self.scale, self.sweep, int(self.done)])}
+        if self.sources is not None:
+            out["sources"] = self.sources
+        return out
 
     @classmethod
     def from_arrays(cls, a: dict[str, np.ndarray], timings: dict) -> "RunState":
         scale, sweep, done = (int(v) for v in a["position"])
         t_init, target, t_now = (float(v) for v in a["scalars"])
         return cls(scale, sweep, bool(done), a["volume"], a["temperature"], a["inherited"].astype(bool),
-                   t_init, target, t_now, a["bias"], timings)
+                   t_init, target, t_now, a["bias"], timings, a.get("sources"))
 
 
 def run_ml(
@@ -294,10 +306,11 @@ def run_ml(
     levels = list(range(params.scales - 1, -1, -1))
     models = [build_scale(labels_img, shape, params, lv) for lv in levels]
     backend.prepare(models)  # refuses, before allocating, what the device cannot hold
-    clock = _Clock(models)
+    clock = _Clock(models, params)
     base = backend.init_volume(shape, seed, models[0].exemplar)
     resynth = params.inherited == "resynthesize"
     annealing = params.relaxation == "annealing"
+    pruned = params.likelihood == "pruned"
     n_sweeps = params.sweeps or params.max_sweeps
     coarse = None
     timings: dict = {"scales": []}
@@ -309,12 +322,13 @@ def run_ml(
         if resume is not None and (i < resume.scale or (i == resume.scale and resume.done)):
             continue
         t_scale = time.perf_counter()
-        first = 1
+        first, sources = 1, None
         if resume is not None and i == resume.scale:  # go on with the sweep after the checkpoint's
             r = resume
             vol, temp, inherited = r.volume.reshape(model.shape), r.temperature.reshape(model.shape), r.inherited
             t_init, target, t_now, first = r.t_init, r.target, r.t_now, r.sweep + 1
             bias = np.array(r.bias, dtype=np.float64)
+            sources = r.sources
             record = timings["scales"].pop()
         else:
             vol, temp = start_state(model, base, coarse, params, seed)
@@ -328,7 +342,7 @@ def run_ml(
             record = {"level": model.level, "shape": list(model.shape), "bandwidth": model.bandwidth,
                       "n_sites": model.n_sites, "n_sets": model.n_sets, "initial_temperature": t_init,
                       "temperatures": [], "visited": [], "sweep_seconds": []}
-        backend.start_scale(model, vol, temp, params)
+        backend.start_scale(model, vol, temp, params, sources=sources)
         balance = Balance(model, params.balance, vol, bias) if params.balance else None
         if progress is not None and not annealing:  # the ETA's sweeps, known before they run
             clock.plan(first, forecast_visits(model, temp, inherited, resynth, params.xi, seed, first, n_sweeps,
@@ -367,7 +381,8 @@ def run_ml(
                 checkpoint.save(RunState(i, sweep, done, np.array(backend.volume(), copy=True),
                                          np.array(backend.temperature(), copy=True), inherited.copy(), t_init,
                                          target, t_now, np.array(bias, dtype=np.float64),
-                                         {"scales": timings["scales"] + [record]}))
+                                         {"scales": timings["scales"] + [record]},
+                                         np.array(backend.sources(), copy=True) if pruned else None))
             if progress is not None:
                 eta = clock.eta(i, sweep, sweep_s, visited, model, t_now, t_prev, target,
                                 0 if done else n_sweeps - sweep)

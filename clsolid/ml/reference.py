@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .balance import n_score_slots, score_stride
+from . import pruned
 from .model import ScaleModel
 from ..core.philox import TAG_INIT, bounded, unit_float, voxel_uint32, voxel_words
 
@@ -41,23 +42,32 @@ def wrapped_coords(voxels: np.ndarray, shape, offsets: np.ndarray) -> np.ndarray
     return flat
 
 
-def log_lcpdf(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels: np.ndarray, view: int) -> np.ndarray:
-    """Unnormalised ``log f_v(lambda)`` for each voxel and label: ``(m, |Lambda|)``."""
+def site_distances(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels: np.ndarray,
+                   view: int) -> np.ndarray:
+    """``A_p`` ``(m, n)``: each voxel's weighted squared neighbourhood distance to every site."""
     nb = wrapped_coords(voxels, model.shape, model.offsets[view])
     x = vol.ravel()[nb].astype(np.float64)
     w = 1.0 - temp.ravel()[nb].astype(np.float64)
     diff = w[:, :, None] * (x[:, :, None] - model.patches[None, :, :])  # (m, R, n)
-    return parzen(model, np.sum(diff**2, axis=1))
+    return np.sum(diff**2, axis=1)
+
+
+def log_lcpdf(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels: np.ndarray, view: int) -> np.ndarray:
+    """Unnormalised ``log f_v(lambda)`` for each voxel and label: ``(m, |Lambda|)``."""
+    return parzen(model, site_distances(model, vol, temp, voxels, view))
 
 
 def parzen(model: ScaleModel, a: np.ndarray, keep: np.ndarray | None = None) -> np.ndarray:
     """Unnormalised ``log f_v(lambda)`` ``(m, |Lambda|)`` from each voxel's weighted squared
     neighbourhood distance to every site, *a* ``(m, n)``: the Parzen sum over the sites, or
-    over those where *keep* ``(m, n)`` is True."""
+    over those where *keep* ``(m, n)`` is True, or, if *keep* is a float array, with each
+    site's term multiplied by it (0: left out)."""
     dist = (model.labels[None, :, None] - model.centres[None, None, :]) ** 2 + a[:, None, :]
     logw = -dist / (2.0 * model.bandwidth**2)
     if keep is not None:
-        logw = np.where(keep[:, None, :], logw, -np.inf)
+        with np.errstate(divide="ignore"):
+            factor = np.log(keep.astype(np.float64))
+        logw = np.where(keep[:, None, :] > 0, logw + factor[:, None, :], -np.inf)
     return logsumexp(logw, axis=2)
 
 
@@ -190,10 +200,18 @@ class ReferenceBackend:
         u = voxel_uint32(seed, shape, TAG_INIT)
         return pixels.ravel()[bounded(u, pixels.size)].astype(np.float64)
 
-    def start_scale(self, model: ScaleModel, vol: np.ndarray, temp: np.ndarray, params) -> None:
+    def start_scale(self, model: ScaleModel, vol: np.ndarray, temp: np.ndarray, params,
+                    sources: np.ndarray | None = None) -> None:
         self.model, self.params = model, params
         self.vol = vol.astype(np.float64).copy()
         self.temp = temp.astype(np.float64).copy()
+        views, n_vox = model.offsets.shape[0], int(np.prod(model.shape))
+        self.src = (np.full((views, n_vox), -1, np.int32) if sources is None
+                    else np.asarray(sources, np.int32).reshape(views, n_vox).copy())
+        self.canon = pruned.source_of_site(model)
+        if params.likelihood == "pruned":
+            self.table = pruned.window_table(model, params.prune_similar)
+            self.shifts = pruned.coherence_offsets(model, params.view_names)
         self._scores = np.zeros((n_score_slots(model.shape), model.labels.size))
         self.stride = score_stride(model.shape)
         self.start_sweep(0, 0, 1.0, np.zeros(model.labels.size))
@@ -207,10 +225,39 @@ class ReferenceBackend:
         for i in range(0, voxels.size, _CHUNK):
             self._update_chunk(voxels[i : i + _CHUNK])
 
-    def _update_chunk(self, voxels: np.ndarray) -> None:
+    def _sums(self, voxels: np.ndarray) -> np.ndarray:
+        """Unnormalised per-view log LCPDFs ``(views, m, L)`` (exact, or pruned where the pruned
+        mode allows); records each voxel's source, as a visit does."""
         m = self.model
         views = m.offsets.shape[0]
-        logl = np.stack([normalise(log_lcpdf(m, self.vol, self.temp, voxels, v)) for v in range(views)])
+        a = [site_distances(m, self.vol, self.temp, voxels, v) for v in range(views)]
+        exact = np.ones(voxels.size, bool)
+        if self.params.likelihood == "pruned":
+            weights = np.stack([pruned.mean_square_weight(self.temp, wrapped_coords(voxels, m.shape, m.offsets[v]))
+                                for v in range(views)])
+            exact = pruned.needs_exact(self.src[:, voxels], weights, self.params.prune_min_weight,
+                                       self.params.prune_sample)
+        out = []
+        for v in range(views):
+            logf = parzen(m, a[v])
+            self.src[v, voxels[exact]] = self.canon[np.argmin(a[v][exact], axis=1)]
+            if not exact.all():
+                logf[~exact] = self._pruned_view(v, voxels[~exact], a[v][~exact])
+            out.append(logf)
+        return np.stack(out)
+
+    def _pruned_view(self, view: int, voxels: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """The pruned sums of *voxels* in *view* from their distances *a* to every site; sets their sources."""
+        t, (vox_off, ex_off), m = self.table, self.shifts, self.model
+        nb = wrapped_coords(voxels, m.shape, vox_off[view])
+        sampled = pruned.sample_sites(self.seed, self.tag, voxels, m.shape, view, m.n_sites, self.params.prune_sample)
+        weights = pruned.term_weights(t, self.src[view][nb], ex_off[view], sampled)
+        self.src[view, voxels] = pruned.nearest_source(t, a, weights)
+        return parzen(m, a, weights)
+
+    def _update_chunk(self, voxels: np.ndarray) -> None:
+        m = self.model
+        logl = np.stack([normalise(f) for f in self._sums(voxels)])
         words = None
         if self.params.relaxation != "icm":
             words = voxel_words(self.seed, *np.unravel_index(voxels, m.shape), self.tag)
@@ -234,7 +281,11 @@ class ReferenceBackend:
         """Combined log scores before the bias of the kept voxels (see ``CLBackend.scores``)."""
         return self._scores
 
+    def sources(self) -> np.ndarray:
+        """Each voxel's source site per view, ``(views, voxels)`` (-1: none yet)."""
+        return self.src
+
     def lcpdf(self, voxels: np.ndarray) -> np.ndarray:
-        """Normalised per-view log LCPDFs ``(views, m, L)`` at the current state (for tests)."""
-        m = self.model
-        return np.stack([normalise(log_lcpdf(m, self.vol, self.temp, voxels, v)) for v in range(m.offsets.shape[0])])
+        """Normalised per-view log LCPDFs ``(views, m, L)`` at the current state (for tests);
+        sources are updated as in a visit."""
+        return np.stack([normalise(f) for f in self._sums(np.asarray(voxels))])

@@ -12,6 +12,7 @@
  *   NGMAX  largest number of centre-value groups (log_sums rows hold NGV*VW, -inf padded)
  *   NLMAX  largest number of labels
  *   NVIEW  number of constrained views (2 or 3)
+ *   NS     windows per source in the pruned sum's candidate sets (clsolid.ml.pruned)
  */
 #define CAT_(a, b) a##b
 #define CAT(a, b) CAT_(a, b)
@@ -84,9 +85,9 @@ inline int neighbour(int voxel, int Y, int X, int Z, __global const int *off)
 }
 
 /* Fold a vector of distances into one group's running (minimum, rescaled sum). */
-inline void add_chunk(floatv a, float k, float *gmin, float *gsum)
+inline void add_chunk(floatv a, float cmin, float k, float *gmin, float *gsum)
 {
-    float cmin = hmin(a), m = *gmin;
+    float m = *gmin;
     if (cmin < m) {
         *gsum *= exp((cmin - m) * k);   /* first chunk: exp(-inf) * 0 = 0 */
         *gmin = m = cmin;
@@ -102,6 +103,8 @@ inline void add_chunk(floatv a, float k, float *gmin, float *gsum)
  * running minimum of A and a sum rescaled to it (online log-sum-exp), so nothing
  * underflows whatever the window size or the number of grey levels.
  * Item i is voxel voxels[i / n_views] seen in view i % n_views.
+ * src[view * n_vox + voxel] receives the voxel's source for the pruned likelihood: the site of
+ * least A, as chunk_site[c * VW + lane] names each lane's (the lowest site with its neighbourhood).
  */
 __kernel void parzen_groups(__global const float *vol, __global const float *temp,
                             int Z, int Y, int X,
@@ -111,7 +114,8 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
                             __global const int *chunk_group,
                             __global const int *chunk_valid,
                             int n_chunks, int n_groups, float k,
-                            __global float *log_sums)         /* [item][NGV * VW] */
+                            __global float *log_sums,         /* [item][NGV * VW] */
+                            __global const int *chunk_site, __global int *src, int n_vox)
 {
     int first = get_global_id(0) * VB;
     if (first >= n_items) return;
@@ -129,7 +133,12 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
         }
     }
 
-    float gmin[VB][NGMAX], gsum[VB][NGMAX];
+    float gmin[VB][NGMAX], gsum[VB][NGMAX], best[VB];
+    int best_chunk[VB];
+    for (int b = 0; b < VB; ++b) {
+        best[b] = INFINITY;
+        best_chunk[b] = 0;
+    }
     for (int b = 0; b < VB; ++b)
         for (int g = 0; g < n_groups; ++g) {
             gmin[b][g] = INFINITY;
@@ -168,13 +177,195 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
         int g = chunk_group[c];
         intv pad = lane >= (intv)(chunk_valid[c]);
         floatv acc[8] = {a0, a1, a2, a3, a4, a5, a6, a7};
-        for (int b = 0; b < VB; ++b)
-            add_chunk(select(acc[b], (floatv)(INFINITY), pad), k, &gmin[b][g], &gsum[b][g]);
+        for (int b = 0; b < VB; ++b) {
+            floatv a = select(acc[b], (floatv)(INFINITY), pad);
+            float cmin = hmin(a);
+            if (cmin < best[b]) {
+                best[b] = cmin;
+                best_chunk[b] = c;
+            }
+            add_chunk(a, cmin, k, &gmin[b][g], &gsum[b][g]);
+        }
+    }
+
+    /* The source: the least lane of the best chunk, recomputed (one chunk per item). */
+    for (int b = 0; b < VB && first + b < n_items; ++b) {
+        int c = best_chunk[b];
+        __global const floatv *pc = (__global const floatv *)(patches + (size_t)c * NR * VW);
+        floatv a = 0.0f;
+        for (int r = 0; r < NR; ++r) {
+            floatv d = xw[b][r] - w[b][r] * pc[r];
+            a += d * d;
+        }
+        const float *as = (const float *)&a;
+        int lane = 0;
+        for (int l = 1; l < chunk_valid[c]; ++l)
+            if (as[l] < as[lane]) lane = l;
+        int item = first + b;
+        src[(item % n_views) * n_vox + voxels[item / n_views]] = chunk_site[c * VW + lane];
     }
 
     for (int b = 0; b < VB && first + b < n_items; ++b)
         for (int g = 0; g < NGV * VW; ++g)   /* rows padded to whole vectors with -inf */
             log_sums[(size_t)(first + b) * NGV * VW + g] = g < n_groups ? log(gsum[b][g]) - k * gmin[b][g] : -INFINITY;
+}
+
+
+/* Flat index of (z, y, x) + off on the torus; off is usually within one period, so the
+ * remainders are taken only when needed. */
+inline int shifted(int z, int y, int x, int Z, int Y, int X, __global const int *off)
+{
+    int a = z + off[0], b = y + off[1], c = x + off[2];
+    if (a < 0 || a >= Z) a = wrap(a, Z);
+    if (b < 0 || b >= Y) b = wrap(b, Y);
+    if (c < 0 || c >= X) c = wrap(c, X);
+    return (a * Y + b) * X + c;
+}
+
+#define NRV ((NR + 7) / 8)   /* neighbours per pruned-sum row, in float8 vectors */
+#define HB (9 * NS > 64 ? 8 : 7)   /* the candidate set's table: 2^HB slots, at least twice the candidates */
+#define HS (1 << HB)
+
+/* The pruned sum: for items item0 <= i < n_items, the same log_sums as parzen_groups but over
+ * each item's candidate windows only (clsolid.ml.pruned): the windows similar[w][0..NS-1] of
+ * the sources of the voxel and its 8 in-slice neighbours (coh_off [view][9][3]), each shifted
+ * back by the neighbour's exemplar offset (coh_shift [view][9][2]) on the grid of
+ * grid_rows x grid_cols sites. A window stands for win_count identical sites (its term is
+ * weighted by their number, win_logc = log count); win_patches rows hold NRV float8 vectors,
+ * zero-padded. The nearest candidate's win_source becomes the voxel's source in that view
+ * (the lowest site with its neighbourhood). The rest of the sum is estimated from n_sample
+ * sites, every (n_sites / n_sample)-th from a start drawn by Philox (counter (x, y, z, tag),
+ * word view), each weighted n_sites / n_sample; a sampled site of a candidate window is
+ * already counted and is skipped (clsolid.ml.pruned.term_weights).
+ */
+__kernel void parzen_candidates(__global const float *vol, __global const float *temp,
+                                int Z, int Y, int X,
+                                __global const int *voxels, int item0, int n_items, int n_views,
+                                __global const int *offsets, __global const int *coh_off,
+                                __global const int *coh_shift, __global int *src, int n_vox,
+                                __global const int *window_of, __global const int *similar,
+                                __global const float *win_patches,   /* [window][NRV * 8] */
+                                __global const int *win_group, __global const float *win_logc,
+                                __global const int *win_source, int grid_rows, int grid_cols,
+                                int n_sample, uint key0, uint key1, uint tag,
+                                int n_groups, float k, __global float *log_sums)
+{
+    int item = item0 + get_global_id(0);
+    if (item >= n_items) return;
+    int voxel = voxels[item / n_views], view = item % n_views;
+    int z = voxel / (Y * X), rem = voxel - z * Y * X;
+    int y = rem / X, x = rem - y * X;
+
+    /* the distinct shifted sources, then their similar windows, sorted and distinct */
+    int base[9], nb = 0;
+    for (int j = 0; j < 9; ++j) {
+        int s = src[view * n_vox + shifted(z, y, x, Z, Y, X, coh_off + (view * 9 + j) * 3)];
+        if (s < 0) continue;
+        int r = s / grid_cols - coh_shift[(view * 9 + j) * 2];
+        int c = s % grid_cols - coh_shift[(view * 9 + j) * 2 + 1];
+        if (r < 0 || r >= grid_rows || c < 0 || c >= grid_cols) continue;
+        int wnd = window_of[r * grid_cols + c], seen = 0;
+        for (int i = 0; i < nb; ++i) seen |= base[i] == wnd;
+        if (!seen) base[nb++] = wnd;
+    }
+    /* their similar windows, each once: a small open-addressing set keeps the distinct ones */
+    int cand[9 * NS], nc = 0, seen[HS];
+    for (int i = 0; i < HS; ++i) seen[i] = -1;
+    for (int j = 0; j < nb; ++j) {
+        __global const int *sim = similar + base[j] * NS;
+        for (int q = 0; q < NS; ++q) {
+            int wnd = sim[q];
+            uint h = ((uint)wnd * 2654435761u) >> (32 - HB);
+            while (seen[h] >= 0 && seen[h] != wnd) h = (h + 1) & (HS - 1);
+            if (seen[h] == wnd) continue;
+            seen[h] = wnd;
+            cand[nc++] = wnd;
+        }
+    }
+
+    float8 xw[NRV], w[NRV];
+    for (int q = 0; q < NRV; ++q) xw[q] = w[q] = (float8)(0.0f);
+    float *xws = (float *)xw, *ws = (float *)w;
+    __global const int *off = offsets + view * NR * 3;
+    for (int r = 0; r < NR; ++r) {
+        int j = shifted(z, y, x, Z, Y, X, off + 3 * r);
+        ws[r] = 1.0f - temp[j];
+        xws[r] = ws[r] * vol[j];
+    }
+    float gmax[NGMAX], gsum[NGMAX];
+    for (int g = 0; g < n_groups; ++g) {
+        gmax[g] = -INFINITY;
+        gsum[g] = 0.0f;
+    }
+    float best = INFINITY;
+    int best_w = 0;
+    int n_sites = grid_rows * grid_cols, start = 0;
+    if (n_sample) {
+        philox4x32_ctr_t ctr = {{(uint)x, (uint)y, (uint)z, tag}};
+        philox4x32_key_t key = {{key0, key1}};
+        start = mul_hi(philox4x32(ctr, key).v[view], (uint)n_sites);
+    }
+    float log_rest = log((float)n_sites / (float)n_sample);
+    for (int i = 0; i < nc + n_sample; ++i) {
+        int wnd;
+        float e0 = 0.0f;
+        if (i < nc) {
+            wnd = cand[i];
+        } else {   /* the sample: the site's window unless it is a candidate */
+            int s = (int)((start + (long)(i - nc) * n_sites / n_sample) % n_sites);
+            wnd = window_of[s];
+            uint h = ((uint)wnd * 2654435761u) >> (32 - HB);
+            while (seen[h] >= 0 && seen[h] != wnd) h = (h + 1) & (HS - 1);
+            if (seen[h] == wnd) continue;
+            e0 = log_rest;
+        }
+        __global const float8 *p = (__global const float8 *)(win_patches + (size_t)wnd * NRV * 8);
+        float8 acc = (float8)(0.0f);
+        for (int q = 0; q < NRV; ++q) {
+            float8 d = xw[q] - w[q] * p[q];
+            acc += d * d;
+        }
+        float4 h = acc.lo + acc.hi;
+        float a = (h.x + h.y) + (h.z + h.w);
+        if (a < best || (a == best && wnd < best_w)) {   /* the lowest window on a tie */
+            best = a;
+            best_w = wnd;
+        }
+        int g = win_group[wnd];
+        float e = (i < nc ? win_logc[wnd] : e0) - k * a;   /* online log-sum-exp of the group's terms */
+        if (e > gmax[g]) {
+            gsum[g] = gsum[g] * exp(gmax[g] - e) + 1.0f;
+            gmax[g] = e;
+        } else {
+            gsum[g] += exp(e - gmax[g]);
+        }
+    }
+    if (best < INFINITY) src[view * n_vox + voxel] = win_source[best_w];
+    for (int g = 0; g < NGV * VW; ++g)
+        log_sums[(size_t)item * NGV * VW + g] = g < n_groups && gsum[g] > 0.0f ? gmax[g] + log(gsum[g]) : -INFINITY;
+}
+
+/* flags[i] = 1 where voxel voxels[i] needs the exact sum (clsolid.ml.pruned.needs_exact): some
+ * view's mean (1 - t)^2 over its neighbours below min_weight, or (need_source) no source yet. */
+__kernel void prune_flags(__global const float *temp, int Z, int Y, int X,
+                          __global const int *voxels, int n_voxels, int n_views,
+                          __global const int *offsets, __global const int *src, int n_vox,
+                          float min_weight, int need_source, __global int *flags)
+{
+    int i = get_global_id(0);
+    if (i >= n_voxels) return;
+    int voxel = voxels[i], flag = 0;
+    int z = voxel / (Y * X), rem = voxel - z * Y * X;
+    int y = rem / X, x = rem - y * X;
+    for (int v = 0; v < n_views; ++v) {
+        float total = 0.0f;
+        for (int r = 0; r < NR; ++r) {
+            float wr = 1.0f - temp[shifted(z, y, x, Z, Y, X, offsets + (v * NR + r) * 3)];
+            total += wr * wr;
+        }
+        if ((need_source && src[v * n_vox + voxel] < 0) || total < min_weight * NR) flag = 1;
+    }
+    flags[i] = flag;
 }
 
 

@@ -1,0 +1,209 @@
+"""The pruned likelihood (issue 12, point 1): the Parzen sum over a few candidate sites.
+
+The exact LCPDF of a voxel sums over every exemplar site; at clsolid's bandwidth nearly all
+of it comes from the few sites whose neighbourhoods are nearest (``tools/prune_check.py``).
+The pruned mode sums over k-coherence candidates instead:
+
+* each voxel keeps, per view, its *source*: the site whose neighbourhood was nearest at its
+  last visit (the exact kernel records it as well as the pruned one);
+* a voxel's candidates in a view are the sources of itself and its 8 in-slice neighbours,
+  each shifted back by that neighbour's offset, and the ``similar`` windows most like each
+  (:func:`similar_windows`);
+* sites are grouped by their whole window (centre and neighbours): identical windows, the
+  flat squares of a binary exemplar above all, count as one candidate weighted by their
+  number, so a candidate set never under-counts a repeated window;
+* the rest of the sum is estimated from ``prune_sample`` sites drawn systematically (every
+  (n / count)-th from a random start, :func:`sample_sites`), each weighted n / count: it
+  carries a hot voxel's LCPDF, which spreads over the whole exemplar, and a voxel with no
+  source yet (the first sweep of a scale) has only it;
+* a voxel whose neighbourhood is hotter than ``prune_min_weight`` (mean ``(1 - t)^2``; 0
+  by default: never) gets the exact sum, as does one with no source when there is no
+  sample (:func:`needs_exact`).
+
+Everything here is plain NumPy, shared by both back ends; :func:`candidate_keep` is the
+float64 reference of the kernel's candidate set.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.philox import bounded, sample_tag, voxel_words
+from .model import ScaleModel
+from .params import VIEW_AXES
+
+_BLOCK = 1024  # windows per block of the similarity search (bounds its memory)
+
+
+@dataclass
+class WindowTable:
+    """The exemplar's distinct windows at one scale, and how to reach them from a site.
+
+    ``window_of`` ``(n_sites,)``: the distinct window of each site; ``first_site`` ``(U,)``:
+    the lowest site holding each window; ``count`` ``(U,)``: how many sites hold it;
+    ``source`` ``(U,)``: the source a voxel records when the window is its nearest
+    (:func:`source_of_site` of its first site);
+    ``similar`` ``(U, S)``: each window first, then its ``S - 1`` nearest other windows by
+    neighbourhood distance (nearest first, lower index first on a tie); ``grid``: the sites'
+    rows and columns (site index = row * columns + column).
+    """
+
+    window_of: np.ndarray
+    first_site: np.ndarray
+    count: np.ndarray
+    source: np.ndarray
+    similar: np.ndarray
+    grid: tuple[int, int]
+
+    @property
+    def n_windows(self) -> int:
+        return self.first_site.size
+
+
+def similar_windows(neighbours: np.ndarray, count: int) -> np.ndarray:
+    """``(U, count)`` int32: each row's index first, then its ``count - 1`` nearest other rows
+    of *neighbours* ``(U, R)`` by squared distance, lower index first on a tie.
+
+    The rows are grey levels (whole numbers), so each distance is a whole number, exact in
+    float64; distance and index are packed into one int64 key, so every order is unique.
+    """
+    u = neighbours.shape[0]
+    count = min(count, u)
+    x = neighbours.astype(np.float64)
+    sq = np.sum(x * x, axis=1)
+    out = np.empty((u, count), np.int32)
+    out[:, 0] = np.arange(u)
+    if count == 1:
+        return out
+    index = np.arange(u, dtype=np.int64)
+    for lo in range(0, u, _BLOCK):
+        hi = min(u, lo + _BLOCK)
+        d = np.rint(sq[lo:hi, None] + sq[None, :] - 2.0 * (x[lo:hi] @ x.T)).astype(np.int64)
+        key = d * u + index[None, :]
+        key[np.arange(hi - lo), np.arange(lo, hi)] = np.iinfo(np.int64).max  # itself is first already
+        part = np.argpartition(key, count - 2, axis=1)[:, : count - 1]
+        order = np.argsort(np.take_along_axis(key, part, axis=1), axis=1)
+        out[lo:hi, 1:] = np.take_along_axis(part, order, axis=1)
+    return out
+
+
+def source_of_site(model: ScaleModel) -> np.ndarray:
+    """``(n_sites,)`` int32: for each site, the lowest site with the same neighbourhood (centre
+    excluded). A voxel's source is recorded so, the same whichever of equal sites a back end
+    finds nearest."""
+    _, first, inverse = np.unique(model.patches.T, axis=0, return_index=True, return_inverse=True)
+    return first[inverse.ravel()].astype(np.int32)
+
+
+def window_table(model: ScaleModel, similar: int) -> WindowTable:
+    """The distinct windows of *model*'s exemplar and their *similar* nearest (see :class:`WindowTable`)."""
+    rows = np.column_stack([model.centres, model.patches.T])
+    _, first, window_of, count = np.unique(rows, axis=0, return_index=True, return_inverse=True,
+                                           return_counts=True)
+    window_of = window_of.ravel()
+    # Number the windows by their first site, so the table does not depend on np.unique's order.
+    order = np.argsort(first, kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    k = 2 * model.half + 1
+    grid = (model.exemplar.shape[0] - k + 1, model.exemplar.shape[1] - k + 1)
+    first = first[order].astype(np.int32)
+    return WindowTable(window_of=rank[window_of].astype(np.int32), first_site=first,
+                       count=count[order].astype(np.int32), source=source_of_site(model)[first],
+                       similar=similar_windows(model.patches.T[first], similar), grid=grid)
+
+
+def coherence_offsets(model: ScaleModel, views: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The voxel and its 8 in-slice neighbours in each view: ``(views, 9, 3)`` (dz, dy, dx)
+    offsets and ``(views, 9, 2)`` exemplar (row, column) offsets, paired as in
+    :func:`clsolid.ml.model.view_offsets`."""
+    vox, ex = [], []
+    for view in views:
+        row_axis, col_axis = VIEW_AXES[view]
+        v3, v2 = [], []
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                off = [0, 0, 0]
+                off[row_axis], off[col_axis] = dr, dc
+                v3.append(off)
+                v2.append((dr, dc))
+        vox.append(v3)
+        ex.append(v2)
+    return np.array(vox, np.int32), np.array(ex, np.int32)
+
+
+def candidate_windows(table: WindowTable, sources: np.ndarray, shifts: np.ndarray) -> list[np.ndarray]:
+    """Each voxel's candidate windows (sorted, distinct) in one view, float64-reference style.
+
+    *sources* ``(m, 9)``: the source sites of each voxel's 3 x 3 in-slice neighbours (-1: none);
+    *shifts* ``(9, 2)``: their exemplar offsets. A source shifted off the site grid is skipped.
+    """
+    rows, cols = table.grid
+    out = []
+    for src in sources:
+        found = []
+        for s, (dr, dc) in zip(src, shifts):
+            if s < 0:
+                continue
+            r, c = s // cols - dr, s % cols - dc
+            if 0 <= r < rows and 0 <= c < cols:
+                found.append(table.similar[table.window_of[r * cols + c]])
+        out.append(np.unique(np.concatenate(found)) if found else np.empty(0, np.int32))
+    return out
+
+
+def candidate_keep(table: WindowTable, sources: np.ndarray, shifts: np.ndarray) -> np.ndarray:
+    """``(m, n_sites)`` bool: the sites whose window is among each voxel's candidates."""
+    keep = np.zeros((sources.shape[0], table.window_of.size), bool)
+    for i, windows in enumerate(candidate_windows(table, sources, shifts)):
+        keep[i] = np.isin(table.window_of, windows)
+    return keep
+
+
+def sample_sites(seed: int, tag: int, voxels: np.ndarray, shape: tuple[int, int, int], view: int,
+                 n_sites: int, count: int) -> np.ndarray:
+    """``(m, min(count, n_sites))``: each voxel's systematic sample of the sites in one view,
+    every ``n_sites / count``-th site from a random start (Philox word *view* of counter
+    (x, y, z, :func:`~clsolid.core.philox.sample_tag` (tag)), keyed by *seed*)."""
+    count = min(count, n_sites)
+    z, y, x = np.unravel_index(voxels, shape)
+    start = bounded(voxel_words(seed, z, y, x, sample_tag(tag))[:, view], n_sites)
+    return (start[:, None] + (np.arange(count) * n_sites) // count) % n_sites
+
+
+def term_weights(table: WindowTable, sources: np.ndarray, shifts: np.ndarray,
+                 sampled: np.ndarray | None) -> np.ndarray:
+    """``(m, n_sites)``: the factor of each site's term in the pruned sum (for
+    :func:`clsolid.ml.reference.parzen`): 1 for the sites of the candidate windows, and
+    ``n_sites / count`` for the *sampled* ``(m, count)`` sites outside them (an unbiased
+    estimate of the rest of the sum), 0 for the others."""
+    keep = candidate_keep(table, sources, shifts).astype(np.float64)
+    if sampled is None or sampled.shape[1] == 0:
+        return keep
+    rest = np.zeros_like(keep)
+    np.put_along_axis(rest, sampled, keep.shape[1] / sampled.shape[1], axis=1)
+    return np.where(keep > 0, keep, rest)
+
+
+def nearest_source(table: WindowTable, a: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``(m,)``: the source recorded from the sites in the sum (*weights* > 0): the nearest
+    by *a* ``(m, n_sites)``, the lowest window on a tie."""
+    a = np.where(weights > 0, a, np.inf)
+    tie = a == a.min(axis=1, keepdims=True)
+    windows = np.where(tie, table.window_of[None, :], np.iinfo(np.int32).max).min(axis=1)
+    return table.source[windows]
+
+
+def mean_square_weight(temp: np.ndarray, neighbours: np.ndarray) -> np.ndarray:
+    """``(m,)``: the mean of ``(1 - t)^2`` over each voxel's neighbours (flat indices ``(m, R)``)."""
+    return np.mean((1.0 - temp.ravel()[neighbours].astype(np.float64)) ** 2, axis=1)
+
+
+def needs_exact(own_sources: np.ndarray, weights: np.ndarray, min_weight: float, sample: int) -> np.ndarray:
+    """``(m,)`` bool: voxels that get the exact sum: some view's mean squared weight
+    (``(views, m)`` *weights*) below *min_weight*, or, without a *sample*, no source yet in
+    some view (no candidates at all). *own_sources* is ``(views, m)``."""
+    exact = np.any(weights < min_weight, axis=0)
+    return exact | np.any(own_sources < 0, axis=0) if sample == 0 else exact

@@ -1,0 +1,236 @@
+"""The pruned likelihood (issue 12, point 1): tables, kernels against the float64 reference,
+and the exact sum where the pruned one cannot be trusted."""
+
+import numpy as np
+import pytest
+
+import clsolid
+from clsolid.errors import InputError
+from clsolid.ml import pruned
+from clsolid.ml.model import build_scale
+from clsolid.ml.opencl import CLBackend
+from clsolid.ml.params import MLParams
+from clsolid.ml.reference import ReferenceBackend, site_distances
+
+SHAPE = (6, 10, 12)
+
+
+def _model(labels, **kw):
+    params = MLParams(scales=1, **kw)
+    return params, build_scale(labels, SHAPE, params, 0)
+
+
+def _state(model, seed=0, hottest=0.3):
+    """A random volume, temperatures in [0, hottest) and a random source for every voxel-view."""
+    rng = np.random.default_rng(seed)
+    vol = rng.choice(model.labels, size=model.shape)
+    temp = rng.random(model.shape) * hottest
+    sources = rng.integers(0, model.n_sites, (model.offsets.shape[0], vol.size)).astype(np.int32)
+    return vol, temp, sources
+
+
+def _backends(device, model, params, vol, temp, sources=None):
+    out = CLBackend(device), ReferenceBackend()
+    for b in out:
+        b.start_scale(model, vol, temp, params, sources=sources)
+    return out
+
+
+def test_similar_windows_are_the_nearest_lowest_index_first():
+    rows = np.random.default_rng(1).integers(0, 3, (300, 8))
+    got = pruned.similar_windows(rows, 6)
+    d = ((rows[:, None, :] - rows[None, :, :]) ** 2).sum(-1).astype(float)
+    np.fill_diagonal(d, np.inf)
+    want = np.lexsort((np.broadcast_to(np.arange(300), d.shape), d), axis=1)[:, :5]
+    np.testing.assert_array_equal(got[:, 0], np.arange(300))
+    np.testing.assert_array_equal(got[:, 1:], want)
+
+
+def test_window_table_groups_identical_windows(small_labels):
+    binary = (small_labels > 7).astype(int)
+    _, model = _model(binary, neighborhood=5)
+    t = pruned.window_table(model, 4)
+    rows = np.column_stack([model.centres, model.patches.T])
+    assert t.count.sum() == model.n_sites and t.n_windows < model.n_sites  # a binary image repeats windows
+    for w in range(t.n_windows):
+        members = np.flatnonzero(t.window_of == w)
+        assert members[0] == t.first_site[w] and members.size == t.count[w]
+        assert (rows[members] == rows[members[0]]).all()
+    assert np.unique(rows[t.first_site], axis=0).shape[0] == t.n_windows
+    # a window's source is the lowest site with its neighbourhood (centre excluded)
+    same = (model.patches.T == model.patches.T[t.source][:, None, :]).all(-1)  # (U, n)
+    np.testing.assert_array_equal(t.source, np.argmax(same[np.arange(t.n_windows)], axis=1))
+    assert t.grid[0] * t.grid[1] == model.n_sites
+
+
+def test_exact_kernel_records_the_nearest_site(device, small_labels):
+    params, model = _model(small_labels, neighborhood=5)
+    vol, temp, _ = _state(model)
+    cl_b, ref = _backends(device, model, params, vol, temp)
+    voxels = np.flatnonzero(model.colour.ravel() == 1)
+    cl_b.group_log_sums(voxels)
+    ref.lcpdf(voxels)
+    for v in range(model.offsets.shape[0]):
+        a = site_distances(model, vol, temp, voxels, v)
+        got = a[np.arange(voxels.size), cl_b.sources()[v, voxels]]
+        np.testing.assert_allclose(got, a.min(axis=1), rtol=1e-5, atol=1e-4)
+        np.testing.assert_array_equal(np.isin(cl_b.sources()[v, voxels], pruned.source_of_site(model)), True)
+    assert (cl_b.sources()[:, voxels] == ref.sources()[:, voxels]).mean() > 0.98
+
+
+@pytest.mark.parametrize("k, views, similar, sample", [(3, 2, 1, 0), (5, 3, 8, 0), (7, 2, 16, 0), (5, 2, 8, 64),
+                                                      (7, 3, 4, 17)])
+def test_pruned_lcpdf_matches_reference(device, small_labels, k, views, similar, sample):
+    params, model = _model(small_labels, neighborhood=k, views=views, likelihood="pruned", prune_similar=similar,
+                           prune_sample=sample)
+    vol, temp, sources = _state(model, seed=k)
+    cl_b, ref = _backends(device, model, params, vol, temp, sources)
+    voxels = np.flatnonzero(model.colour.ravel() == 0)
+    got, want = cl_b.lcpdf(voxels), ref.lcpdf(voxels)
+    assert cl_b.pruned_visits == voxels.size and cl_b.exact_visits == 0
+    np.testing.assert_allclose(got, want, atol=2e-3 * max(1.0, np.abs(want).max() / 100))
+    # the new sources: the nearest candidate's (ties aside, the same)
+    assert (cl_b.sources()[:, voxels] == ref.sources()[:, voxels]).mean() > 0.98
+    exact = ReferenceBackend()
+    exact.start_scale(model, vol, temp, MLParams(scales=1, neighborhood=k, views=views))
+    assert not np.allclose(want, exact.lcpdf(voxels), atol=1e-3)  # it is pruned: candidates, not every site
+
+
+def test_a_sample_of_every_site_is_the_exact_sum(device, small_labels):
+    params, model = _model(small_labels, neighborhood=5, likelihood="pruned", prune_sample=4096)
+    vol, temp, sources = _state(model, seed=8)
+    cl_b, ref = _backends(device, model, params, vol, temp, sources)
+    exact = ReferenceBackend()
+    exact.start_scale(model, vol, temp, MLParams(scales=1, neighborhood=5))
+    voxels = np.flatnonzero(model.colour.ravel() == 1)
+    want = exact.lcpdf(voxels)
+    np.testing.assert_allclose(ref.lcpdf(voxels), want, atol=1e-9)
+    np.testing.assert_allclose(cl_b.lcpdf(voxels), want, atol=2e-3 * max(1.0, np.abs(want).max() / 100))
+
+
+def test_the_sample_follows_seed_and_sweep(small_labels):
+    _, model = _model(small_labels, neighborhood=5)
+    voxels = np.arange(50)
+    a = pruned.sample_sites(1, 7, voxels, model.shape, 0, model.n_sites, 16)
+    assert a.shape == (50, 16) and (np.diff(np.sort(a, axis=1), axis=1) > 0).all()  # distinct sites
+    np.testing.assert_array_equal(a, pruned.sample_sites(1, 7, voxels, model.shape, 0, model.n_sites, 16))
+    for other in (pruned.sample_sites(2, 7, voxels, model.shape, 0, model.n_sites, 16),
+                  pruned.sample_sites(1, 8, voxels, model.shape, 0, model.n_sites, 16),
+                  pruned.sample_sites(1, 7, voxels, model.shape, 1, model.n_sites, 16)):
+        assert (other != a).any()
+
+
+def test_pruned_sum_is_a_subset_of_the_exact_one(device, small_labels):
+    """Unnormalised and without a sample, each label's pruned sum can only be below the exact one."""
+    params, model = _model(small_labels, neighborhood=5, likelihood="pruned", prune_sample=0)
+    vol, temp, sources = _state(model, seed=3)
+    cl_b, _ = _backends(device, model, params, vol, temp, sources)
+    exact = CLBackend(device)
+    exact.start_scale(model, vol, temp, MLParams(scales=1, neighborhood=5))
+    voxels = np.flatnonzero(model.colour.ravel() == 2)
+    got, want = cl_b.group_log_sums(voxels), exact.group_log_sums(voxels)
+    assert np.all(got <= want + 1e-3 * np.maximum(1, np.abs(want)))
+    assert np.any(got < want - 1e-2)
+
+
+def test_hot_or_sourceless_voxels_get_the_exact_sum(device, small_labels):
+    params, model = _model(small_labels, neighborhood=5, likelihood="pruned", prune_min_weight=0.3, prune_sample=0)
+    vol, temp, sources = _state(model, seed=4)
+    voxels = np.flatnonzero(model.colour.ravel() == 0)
+    hot, sourceless = voxels[::3], voxels[1::3]
+    temp.ravel()[:] = 0.0
+    for v in hot:  # every neighbour at t = 0.9: mean (1 - t)^2 = 0.01 < 0.3
+        z, y, x = np.unravel_index(v, model.shape)
+        temp[max(z - 2, 0): z + 3, max(y - 2, 0): y + 3, max(x - 2, 0): x + 3] = 0.9
+    sources[1, sourceless] = -1
+    flagged = pruned.needs_exact(sources[:, voxels], np.stack([
+        pruned.mean_square_weight(temp, np.asarray(_nb(model, voxels, v))) for v in range(2)]), 0.3, 0)
+    cl_b, ref = _backends(device, model, params, vol, temp, sources)
+    exact = ReferenceBackend()
+    exact.start_scale(model, vol, temp, MLParams(scales=1, neighborhood=5))
+    got, want, full = cl_b.lcpdf(voxels), ref.lcpdf(voxels), exact.lcpdf(voxels)
+    assert flagged[np.isin(voxels, hot)].all() and flagged[np.isin(voxels, sourceless)].all()
+    assert cl_b.exact_visits == flagged.sum() < voxels.size
+    np.testing.assert_allclose(got[:, flagged], full[:, flagged], atol=2e-3 * max(1.0, np.abs(full).max() / 100))
+    np.testing.assert_allclose(want[:, flagged], full[:, flagged], atol=1e-9)
+    np.testing.assert_allclose(got, want, atol=2e-3 * max(1.0, np.abs(want).max() / 100))
+    assert (cl_b.sources()[:, voxels] >= 0).all()  # every visited voxel has a source now
+
+
+def _nb(model, voxels, view):
+    from clsolid.ml.reference import wrapped_coords
+
+    return wrapped_coords(voxels, model.shape, model.offsets[view])
+
+
+def test_one_pruned_gibbs_sweep_matches_reference(device, small_labels):
+    params, model = _model(small_labels, neighborhood=5, likelihood="pruned")
+    vol, temp, sources = _state(model, seed=6)
+    cl_b, ref = _backends(device, model, params, vol, temp, sources)
+    for b in (cl_b, ref):
+        b.start_sweep(3, 7, 1.0, np.zeros(model.labels.size))
+    voxels = np.flatnonzero(model.colour.ravel() == 3)
+    for b in (cl_b, ref):
+        b.update(voxels)
+    same = cl_b.volume().ravel()[voxels] == ref.volume().ravel()[voxels]
+    assert same.mean() > 0.98  # a float32 near-tie may tip a draw
+    np.testing.assert_allclose(cl_b.temperature(), ref.temperature(), atol=1e-6)
+
+
+@pytest.mark.parametrize("name", ["porous50", "composite3", "gravel"])
+def test_pruned_synthesis_keeps_the_material(device, name):
+    """The pruned mode on gallery exemplars at 24^3: fractions, grey spread and mirror kept,
+    and the same volume for the same seed."""
+    from clsolid.gallery import gallery_exemplar
+    from clsolid.metrics.symmetry import mirror_correlation
+
+    ex = gallery_exemplar(name, 64)
+    runs = [clsolid.synthesize(ex, (24, 24, 24), rng=5, device=device, likelihood="pruned") for _ in range(2)]
+    np.testing.assert_array_equal(runs[0], runs[1])
+    values = np.unique(ex)
+    if values.size <= 4:
+        frac = np.array([(runs[0] == v).mean() for v in values])
+        assert np.abs(frac - np.array([(ex == v).mean() for v in values])).max() < 0.03
+    assert mirror_correlation(runs[0].astype(float)) <= 0.2  # as the defaults' fast test
+    assert abs(runs[0].astype(float).std() - ex.std()) < 0.15 * ex.std()
+
+
+def test_pruned_run_resumes_identically(tmp_path, device):
+    from clsolid.gallery import gallery_exemplar
+
+    ex = gallery_exemplar("porous50", 64)
+    kw = dict(rng=2, device=device, likelihood="pruned", scales=2, full_output=True)
+    whole = clsolid.synthesize(ex, (16, 16, 16), **kw)
+    seen = []
+
+    def stop(info):
+        seen.append(info)
+        if info.scale == 2 and info.sweep == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        clsolid.synthesize(ex, (16, 16, 16), checkpoint=tmp_path / "ck", progress=stop, **kw)
+    resumed = clsolid.resume(tmp_path / "ck", device=device, full_output=True)
+    np.testing.assert_array_equal(resumed.volume, whole.volume)
+
+
+@pytest.mark.parametrize("bad", [dict(likelihood="fast"), dict(prune_similar=0), dict(prune_similar=17),
+                                 dict(prune_min_weight=1.5), dict(prune_min_weight="x"), dict(prune_sample=-1),
+                                 dict(prune_sample=5000)])
+def test_bad_pruned_parameters_are_refused(bad):
+    with pytest.raises(InputError, match=next(iter(bad))):
+        MLParams(**bad)
+
+
+@pytest.mark.parametrize("name, levels, want", [("porous50", 32, "pruned"), ("brick", 32, "exact"),
+                                                ("brick", 8, "exact")])
+def test_auto_prunes_categorical_exemplars_only(device, name, levels, want):
+    from clsolid.gallery import gallery_exemplar
+
+    image = name if name == "brick" else gallery_exemplar(name, 64)
+    res = clsolid.synthesize(image, (8, 8, 8), levels=levels, scales=1, neighborhood=3, rng=1, device=device,
+                             full_output=True)
+    assert res.params["likelihood"] == want
+    forced = clsolid.synthesize(image, (8, 8, 8), levels=levels, scales=1, neighborhood=3, rng=1, device=device,
+                                likelihood="exact" if want == "pruned" else "pruned", full_output=True)
+    assert forced.params["likelihood"] != want

@@ -1,0 +1,81 @@
+"""Real sizes (issue 12, point 5): the likelihood method's cost against exemplar and volume size,
+with the exact and the pruned Parzen sum.
+
+For each case (exemplar side : cube side) and likelihood, grows a gallery exemplar with the
+defaults and reports the time end to end, the sweeps, and the cost per voxel visit at the
+finest scale (it should stay flat as the cube grows; with the exact sum it grows with the
+exemplar). A run that passes ``--budget`` seconds is stopped there, and its figures are
+those of the sweeps it finished (marked "stopped"). NumPy's float32 matmul rate, measured in
+the same run, is the machine's reference. Timings only: nothing here asserts on speed.
+Not measured, because clsolid cannot do them yet: tiled runs (512^3) and Dask workers.
+
+    python tools/bench_scale.py                                   # 64:64 and 128:128, both sums
+    python tools/bench_scale.py --cases 256:256 --likelihoods pruned --budget 1800
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+import clsolid
+from bench_ml import matmul_gflops
+from clsolid.gallery import gallery_exemplar
+
+
+class _Stop(Exception):
+    """Raised from the progress callback when a run passes its budget."""
+
+
+def run(image: np.ndarray, side: int, likelihood: str, budget: float, device) -> dict:
+    """Grow a *side*^3 cube; return the time, sweeps and finest-scale cost per voxel visit."""
+    sweeps: list = []
+    t0 = time.perf_counter()
+
+    def progress(info) -> None:
+        last = sweeps[-1]["elapsed"] if sweeps else 0.0
+        sweeps.append({"scale": info.scale, "n_scales": info.n_scales, "visited": info.visited,
+                       "elapsed": info.elapsed, "seconds": info.elapsed - last})
+        if time.perf_counter() - t0 > budget:
+            raise _Stop
+
+    stopped = False
+    try:
+        clsolid.synthesize(image, (side,) * 3, rng=1, device=device, likelihood=likelihood, progress=progress)
+    except _Stop:
+        stopped = True
+    finest = [s for s in sweeps if s["scale"] == s["n_scales"]]
+    visits = sum(s["visited"] for s in finest)
+    return {"seconds": time.perf_counter() - t0, "stopped": stopped, "sweeps": len(sweeps),
+            "finest_sweeps": len(finest),
+            "per_visit_us": 1e6 * sum(s["seconds"] for s in finest) / visits if visits else float("nan")}
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cases", nargs="+", default=["64:64", "128:128"], metavar="EX:CUBE",
+                    help="exemplar side (64-256) and cube side (default 64:64 128:128)")
+    ap.add_argument("--names", nargs="+", default=["porous50", "gravel"], help="gallery exemplars")
+    ap.add_argument("--likelihoods", nargs="+", default=["exact", "pruned"], choices=("exact", "pruned"))
+    ap.add_argument("--budget", type=float, default=900.0, help="seconds after which a run is stopped (900)")
+    ap.add_argument("--device", default=None)
+    args = ap.parse_args(argv)
+    device = clsolid.select_device(args.device)
+    print(f"{device.name}; matmul reference {matmul_gflops():.1f} GFLOP/s (float32, NumPy, this run)")
+    print("| exemplar | case | likelihood | time (s) | sweeps (finest) | finest scale, us per voxel visit |")
+    print("|---|---|---|---|---|---|")
+    for case in args.cases:
+        ex_side, cube = (int(v) for v in case.split(":"))
+        for name in args.names:
+            image = gallery_exemplar(name, ex_side)
+            for likelihood in args.likelihoods:
+                r = run(image, cube, likelihood, args.budget, device)
+                note = " (stopped)" if r["stopped"] else ""
+                print(f"| {name} | {ex_side}² → {cube}³ | {likelihood} | {r['seconds']:.1f}{note} | "
+                      f"{r['sweeps']} ({r['finest_sweeps']}) | {r['per_visit_us']:.1f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
