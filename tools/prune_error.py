@@ -29,7 +29,7 @@ from clsolid.ml.driver import run_ml
 from clsolid.ml.model import ScaleModel
 from clsolid.ml.opencl import CLBackend
 from clsolid.ml.params import MLParams
-from clsolid.ml.reference import normalise, parzen, site_distances, wrapped_coords
+from clsolid.ml.reference import normalise, parzen, site_distances
 
 
 class _Probe(CLBackend):
@@ -42,8 +42,7 @@ class _Probe(CLBackend):
     def start_scale(self, model: ScaleModel, vol, temp, params, sources=None) -> None:
         self.sweep, self.tag = -1, None  # start_scale's own start_sweep is not a sweep
         super().start_scale(model, vol, temp, params, sources)
-        self.table = pruned.window_table(model, params.prune_similar)
-        self.shifts = pruned.coherence_offsets(model, params.view_names)
+        self.pruning = pruned.Pruning(model, params)
 
     def start_sweep(self, seed, tag, t_in, bias) -> None:
         super().start_sweep(seed, tag, t_in, bias)
@@ -60,23 +59,18 @@ class _Probe(CLBackend):
         super().update(voxels)
 
     def _measure(self, voxels) -> dict:
-        m, p = self.model, self.params
+        m = self.model
         vol, temp = np.array(self.volume(), np.float64), np.array(self.temperature(), np.float64)
         src = np.array(self.sources())
         part = self.rng.choice(voxels, min(self.sample, voxels.size), replace=False)
-        views = m.offsets.shape[0]
-        weights = np.stack([pruned.mean_square_weight(temp, wrapped_coords(part, m.shape, m.offsets[v]))
-                            for v in range(views)])
-        part = part[~pruned.needs_exact(src[:, part], weights, p.prune_min_weight, p.prune_sample)]
+        part = part[~self.pruning.exact(temp, src, part)]
         row = {"level": m.level, "sweep": self.sweep, "measured": int(part.size)}
         if part.size == 0:
             return row
         exact, cut = [], []
-        for v in range(views):
+        for v in range(m.offsets.shape[0]):
             a = site_distances(m, vol, temp, part, v)
-            nb = wrapped_coords(part, m.shape, self.shifts[0][v])
-            sampled = pruned.sample_sites(self.seed, self.tag, part, m.shape, v, m.n_sites, p.prune_sample)
-            keep = pruned.term_weights(self.table, src[v][nb], self.shifts[1][v], sampled)
+            keep = self.pruning.weights(src, self.seed, self.tag, part, v)
             exact.append(normalise(parzen(m, a)))
             cut.append(normalise(parzen(m, a, keep)))
         pe, pc = (np.exp(normalise(np.sum(x, axis=0))) for x in (exact, cut))

@@ -39,6 +39,18 @@ def view_offsets(view: str, half: int) -> np.ndarray:
     return np.array(out, dtype=np.int32)
 
 
+def wrapped_coords(voxels: np.ndarray, shape, offsets: np.ndarray) -> np.ndarray:
+    """Flat indices of ``voxels + offsets`` on the torus: returns an ``(m, R)`` array.
+
+    Each axis has few distinct offsets: they are wrapped once per voxel, then gathered."""
+    stride = (shape[1] * shape[2], shape[2], 1)
+    flat = np.zeros((np.size(voxels), offsets.shape[0]), np.int64)
+    for axis, c in enumerate(np.unravel_index(voxels, shape)):
+        values, which = np.unique(offsets[:, axis], return_inverse=True)
+        flat += (((c[:, None] + values) % shape[axis]) * stride[axis])[:, which.ravel()]
+    return flat
+
+
 def exemplar_tables(exemplar: np.ndarray, half: int) -> tuple[np.ndarray, np.ndarray]:
     """Centre values ``(n,)`` and neighbour values ``(R, n)`` of every valid exemplar site.
 

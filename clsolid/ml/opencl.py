@@ -12,7 +12,8 @@ from .model import ScaleModel
 from .params import MLParams
 from ..core.philox import TAG_INIT, sample_tag, seed_key
 from ..core.probe import VECTOR_WIDTHS, probe
-from .pruned import coherence_offsets, source_of_site, window_table
+from . import pruned
+from .pruned import source_of_site
 
 _F4 = 4  # bytes per float32 / int32
 
@@ -160,14 +161,15 @@ class CLBackend:
         self.model, self.params = model, params
         self.k = self._kernels(model, n_labels)
         patches, chunk_group, chunk_valid, gvals, chunk_site = group_tables(model, self.vw)
-        self.chunk_site = self._buf(source_of_site(model)[chunk_site])  # the source each lane records
+        canon = source_of_site(model)
+        self.chunk_site = self._buf(canon[chunk_site])  # the source each lane records
         views, n_vox = model.offsets.shape[0], int(np.prod(model.shape))
         if sources is None:
             sources = np.full((views, n_vox), -1, np.int32)
         self.src = self._buf(np.asarray(sources, np.int32).reshape(views, n_vox), writable=True)
         self._src = np.empty((views, n_vox), np.int32)
         if params.likelihood == "pruned":
-            self._start_pruned(model, params, gvals)
+            self._start_pruned(pruned.Pruning(model, params, canon), gvals)
         self.n_groups, self.n_chunks = gvals.size, chunk_group.size
         self.vol_buf = self._buf(vol.astype(np.float32), writable=True)
         self.temp_buf = self._buf(temp.astype(np.float32), writable=True)
@@ -195,20 +197,19 @@ class CLBackend:
         self.score_args = (self.scores_buf, np.int32(score_stride(model.shape)))
         self.start_sweep(0, 0, 1.0, np.zeros(n_labels))
 
-    def _start_pruned(self, model: ScaleModel, params: MLParams, gvals: np.ndarray) -> None:
+    def _start_pruned(self, pruning: pruned.Pruning, gvals: np.ndarray) -> None:
         """The pruned sum's tables: distinct windows, their similar sets, coherence offsets."""
         import pyopencl as cl
 
-        table = window_table(model, params.prune_similar)
+        model, table = pruning.model, pruning.table
         first = table.first_site
-        ns = params.prune_similar  # the kernel reads NS columns: pad a small exemplar's table
+        ns = pruning.params.prune_similar  # the kernel reads NS columns: pad a small exemplar's table
         similar = np.concatenate([table.similar, np.repeat(table.similar[:, :1], ns - table.similar.shape[1], 1)], 1)
-        coh_off, coh_shift = coherence_offsets(model, params.view_names)
         group = np.searchsorted(gvals, model.centres[first].astype(np.float32)).astype(np.int32)
         nr = model.patches.shape[0]
         rows = np.zeros((first.size, -(-nr // 8) * 8), np.float32)  # whole float8 vectors, zero-padded
         rows[:, :nr] = model.patches.T[first]
-        self.pruned = (self._buf(coh_off), self._buf(coh_shift), self.src, np.int32(int(np.prod(model.shape))),
+        self.pruned = (self._buf(pruning.voxel_offsets), self._buf(pruning.exemplar_offsets), self.src, np.int32(int(np.prod(model.shape))),
                        self._buf(table.window_of), self._buf(similar.astype(np.int32)),
                        self._buf(rows), self._buf(group),
                        self._buf(np.log(table.count).astype(np.float32)), self._buf(table.source),
@@ -245,8 +246,8 @@ class CLBackend:
         n_items = voxels.size * views
         cl.enqueue_copy(q, self.vox_buf, voxels)
         n_exact = voxels.size
-        if self.params.likelihood == "pruned":
-            n_exact = self._exact_first(voxels)
+        if self.params.likelihood == "pruned":  # with the default settings no voxel can need the exact sum
+            n_exact = self._exact_first(voxels) if pruned.may_need_exact(self.params) else 0
         if n_exact:
             self.k["parzen_groups"](
                 q, (self._global(-(-n_exact * views // self.vb)),), (self.local,),
@@ -254,6 +255,9 @@ class CLBackend:
                 np.int32(views), self.offsets, self.patches, self.chunk_group, self.chunk_valid,
                 np.int32(self.n_chunks), np.int32(self.n_groups), self.kfactor, self.sums,
                 self.chunk_site, self.src, np.int32(int(np.prod(m.shape))))
+        if self.params.likelihood == "pruned":
+            self.exact_visits += n_exact
+            self.pruned_visits += voxels.size - n_exact
         if n_exact < voxels.size:
             self.k["parzen_candidates"](
                 q, (self._global(n_items - n_exact * views, self.item_local),), (self.item_local,),
@@ -279,8 +283,6 @@ class CLBackend:
         exact = flags.astype(bool)
         voxels[:] = np.concatenate([voxels[exact], voxels[~exact]])
         cl.enqueue_copy(q, self.vox_buf, voxels)
-        self.exact_visits += int(exact.sum())
-        self.pruned_visits += int((~exact).sum())
         return int(exact.sum())
 
     def _shape_args(self) -> tuple:

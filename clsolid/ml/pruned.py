@@ -31,8 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.philox import bounded, sample_tag, voxel_words
-from .model import ScaleModel
-from .params import VIEW_AXES
+from .model import ScaleModel, view_offsets, wrapped_coords
+from .params import VIEW_AXES, MLParams
 
 _BLOCK = 1024  # windows per block of the similarity search (bounds its memory)
 
@@ -97,8 +97,9 @@ def source_of_site(model: ScaleModel) -> np.ndarray:
     return first[inverse.ravel()].astype(np.int32)
 
 
-def window_table(model: ScaleModel, similar: int) -> WindowTable:
-    """The distinct windows of *model*'s exemplar and their *similar* nearest (see :class:`WindowTable`)."""
+def window_table(model: ScaleModel, similar: int, sources: np.ndarray | None = None) -> WindowTable:
+    """The distinct windows of *model*'s exemplar and their *similar* nearest (see :class:`WindowTable`);
+    *sources*: :func:`source_of_site` of *model*, if the caller has it already."""
     rows = np.column_stack([model.centres, model.patches.T])
     _, first, window_of, count = np.unique(rows, axis=0, return_index=True, return_inverse=True,
                                            return_counts=True)
@@ -111,27 +112,18 @@ def window_table(model: ScaleModel, similar: int) -> WindowTable:
     grid = (model.exemplar.shape[0] - k + 1, model.exemplar.shape[1] - k + 1)
     first = first[order].astype(np.int32)
     return WindowTable(window_of=rank[window_of].astype(np.int32), first_site=first,
-                       count=count[order].astype(np.int32), source=source_of_site(model)[first],
+                       count=count[order].astype(np.int32),
+                       source=(source_of_site(model) if sources is None else sources)[first],
                        similar=similar_windows(model.patches.T[first], similar), grid=grid)
 
 
 def coherence_offsets(model: ScaleModel, views: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
     """The voxel and its 8 in-slice neighbours in each view: ``(views, 9, 3)`` (dz, dy, dx)
     offsets and ``(views, 9, 2)`` exemplar (row, column) offsets, paired as in
-    :func:`clsolid.ml.model.view_offsets`."""
-    vox, ex = [], []
-    for view in views:
-        row_axis, col_axis = VIEW_AXES[view]
-        v3, v2 = [], []
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                off = [0, 0, 0]
-                off[row_axis], off[col_axis] = dr, dc
-                v3.append(off)
-                v2.append((dr, dc))
-        vox.append(v3)
-        ex.append(v2)
-    return np.array(vox, np.int32), np.array(ex, np.int32)
+    :func:`clsolid.ml.model.view_offsets` (whose 3 x 3 window, centre put back, they are)."""
+    vox = np.stack([np.insert(view_offsets(view, 1), 4, 0, axis=0) for view in views])
+    ex = np.stack([vox[i][:, list(VIEW_AXES[view])] for i, view in enumerate(views)])
+    return vox.astype(np.int32), ex.astype(np.int32)
 
 
 def candidate_windows(table: WindowTable, sources: np.ndarray, shifts: np.ndarray) -> list[np.ndarray]:
@@ -207,3 +199,40 @@ def needs_exact(own_sources: np.ndarray, weights: np.ndarray, min_weight: float,
     some view (no candidates at all). *own_sources* is ``(views, m)``."""
     exact = np.any(weights < min_weight, axis=0)
     return exact | np.any(own_sources < 0, axis=0) if sample == 0 else exact
+
+
+def may_need_exact(params: MLParams) -> bool:
+    """Whether any voxel can need the exact sum under *params* (:func:`needs_exact`): not with a
+    sample and no weight threshold, the defaults, so a run need not look."""
+    return params.prune_min_weight > 0 or params.prune_sample == 0
+
+
+class Pruning:
+    """The pruned sum at one scale: its tables, and the float64 reference of which voxels get
+    the exact sum and of each site's factor in the pruned one.
+
+    *sources*: :func:`source_of_site` of *model*, if the caller has it already.
+    """
+
+    def __init__(self, model: ScaleModel, params: MLParams, sources: np.ndarray | None = None) -> None:
+        self.model, self.params = model, params
+        self.table = window_table(model, params.prune_similar, sources)
+        self.voxel_offsets, self.exemplar_offsets = coherence_offsets(model, params.view_names)
+
+    def exact(self, temp: np.ndarray, src: np.ndarray, voxels: np.ndarray) -> np.ndarray:
+        """``(m,)`` bool: which *voxels* get the exact sum, given the temperatures and the
+        sources ``(views, voxels)`` (:func:`needs_exact`)."""
+        m, p = self.model, self.params
+        if not may_need_exact(p):
+            return np.zeros(np.size(voxels), bool)
+        weights = np.stack([mean_square_weight(temp, wrapped_coords(voxels, m.shape, off)) for off in m.offsets])
+        return needs_exact(src[:, voxels], weights, p.prune_min_weight, p.prune_sample)
+
+    def weights(self, src: np.ndarray, seed: int, tag: int, voxels: np.ndarray, view: int) -> np.ndarray:
+        """``(m, n_sites)``: each site's factor in the pruned sum of *voxels* in *view*
+        (:func:`term_weights`), their candidates taken from the sources ``(views, voxels)`` and
+        their sample from the sweep's random stream (*seed*, relaxation *tag*)."""
+        m = self.model
+        nb = wrapped_coords(voxels, m.shape, self.voxel_offsets[view])
+        sampled = sample_sites(seed, tag, voxels, m.shape, view, m.n_sites, self.params.prune_sample)
+        return term_weights(self.table, src[view][nb], self.exemplar_offsets[view], sampled)

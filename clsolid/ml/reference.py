@@ -13,7 +13,7 @@ import numpy as np
 
 from .balance import n_score_slots, score_stride
 from . import pruned
-from .model import ScaleModel
+from .model import ScaleModel, wrapped_coords  # noqa: F401 (wrapped_coords: also this module's name)
 from ..core.philox import TAG_INIT, bounded, unit_float, voxel_uint32, voxel_words
 
 _CHUNK = 128  # voxels per vectorised step, to bound memory
@@ -28,18 +28,6 @@ TIE_TOL = 1e-4
 def logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
     m = np.max(a, axis=axis, keepdims=True)
     return np.squeeze(m, axis) + np.log(np.sum(np.exp(a - m), axis=axis))
-
-
-def wrapped_coords(voxels: np.ndarray, shape, offsets: np.ndarray) -> np.ndarray:
-    """Flat indices of ``voxels + offsets`` on the torus: returns an ``(m, R)`` array.
-
-    Each axis has few distinct offsets: they are wrapped once per voxel, then gathered."""
-    stride = (shape[1] * shape[2], shape[2], 1)
-    flat = np.zeros((np.size(voxels), offsets.shape[0]), np.int64)
-    for axis, c in enumerate(np.unravel_index(voxels, shape)):
-        values, which = np.unique(offsets[:, axis], return_inverse=True)
-        flat += (((c[:, None] + values) % shape[axis]) * stride[axis])[:, which.ravel()]
-    return flat
 
 
 def site_distances(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels: np.ndarray,
@@ -210,8 +198,7 @@ class ReferenceBackend:
                     else np.asarray(sources, np.int32).reshape(views, n_vox).copy())
         self.canon = pruned.source_of_site(model)
         if params.likelihood == "pruned":
-            self.table = pruned.window_table(model, params.prune_similar)
-            self.shifts = pruned.coherence_offsets(model, params.view_names)
+            self.pruning = pruned.Pruning(model, params, self.canon)
         self._scores = np.zeros((n_score_slots(model.shape), model.labels.size))
         self.stride = score_stride(model.shape)
         self.start_sweep(0, 0, 1.0, np.zeros(model.labels.size))
@@ -229,31 +216,24 @@ class ReferenceBackend:
         """Unnormalised per-view log LCPDFs ``(views, m, L)`` (exact, or pruned where the pruned
         mode allows); records each voxel's source, as a visit does."""
         m = self.model
-        views = m.offsets.shape[0]
-        a = [site_distances(m, self.vol, self.temp, voxels, v) for v in range(views)]
         exact = np.ones(voxels.size, bool)
         if self.params.likelihood == "pruned":
-            weights = np.stack([pruned.mean_square_weight(self.temp, wrapped_coords(voxels, m.shape, m.offsets[v]))
-                                for v in range(views)])
-            exact = pruned.needs_exact(self.src[:, voxels], weights, self.params.prune_min_weight,
-                                       self.params.prune_sample)
-        out = []
-        for v in range(views):
-            logf = parzen(m, a[v])
-            self.src[v, voxels[exact]] = self.canon[np.argmin(a[v][exact], axis=1)]
+            exact = self.pruning.exact(self.temp, self.src, voxels)
+        out = np.empty((m.offsets.shape[0], voxels.size, m.labels.size))
+        for v in range(m.offsets.shape[0]):
+            a = site_distances(m, self.vol, self.temp, voxels, v)
+            if exact.any():
+                out[v, exact] = parzen(m, a[exact])
+                self.src[v, voxels[exact]] = self.canon[np.argmin(a[exact], axis=1)]
             if not exact.all():
-                logf[~exact] = self._pruned_view(v, voxels[~exact], a[v][~exact])
-            out.append(logf)
-        return np.stack(out)
+                out[v, ~exact] = self._pruned_view(v, voxels[~exact], a[~exact])
+        return out
 
     def _pruned_view(self, view: int, voxels: np.ndarray, a: np.ndarray) -> np.ndarray:
         """The pruned sums of *voxels* in *view* from their distances *a* to every site; sets their sources."""
-        t, (vox_off, ex_off), m = self.table, self.shifts, self.model
-        nb = wrapped_coords(voxels, m.shape, vox_off[view])
-        sampled = pruned.sample_sites(self.seed, self.tag, voxels, m.shape, view, m.n_sites, self.params.prune_sample)
-        weights = pruned.term_weights(t, self.src[view][nb], ex_off[view], sampled)
-        self.src[view, voxels] = pruned.nearest_source(t, a, weights)
-        return parzen(m, a, weights)
+        weights = self.pruning.weights(self.src, self.seed, self.tag, voxels, view)
+        self.src[view, voxels] = pruned.nearest_source(self.pruning.table, a, weights)
+        return parzen(self.model, a, weights)
 
     def _update_chunk(self, voxels: np.ndarray) -> None:
         m = self.model

@@ -77,11 +77,22 @@ inline int wrap(int i, int n)
     return r < 0 ? r + n : r;
 }
 
+/* Flat index of (z, y, x) + off on the torus; off is usually within one period, so the
+ * remainders are taken only when needed. */
+inline int shifted(int z, int y, int x, int Z, int Y, int X, __global const int *off)
+{
+    int a = z + off[0], b = y + off[1], c = x + off[2];
+    if (a < 0 || a >= Z) a = wrap(a, Z);
+    if (b < 0 || b >= Y) b = wrap(b, Y);
+    if (c < 0 || c >= X) c = wrap(c, X);
+    return (a * Y + b) * X + c;
+}
+
 inline int neighbour(int voxel, int Y, int X, int Z, __global const int *off)
 {
     int z = voxel / (Y * X), rem = voxel - z * Y * X;
     int y = rem / X, x = rem - y * X;
-    return (wrap(z + off[0], Z) * Y + wrap(y + off[1], Y)) * X + wrap(x + off[2], X);
+    return shifted(z, y, x, Z, Y, X, off);
 }
 
 /* Fold a vector of distances into one group's running (minimum, rescaled sum). */
@@ -211,20 +222,18 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
 }
 
 
-/* Flat index of (z, y, x) + off on the torus; off is usually within one period, so the
- * remainders are taken only when needed. */
-inline int shifted(int z, int y, int x, int Z, int Y, int X, __global const int *off)
-{
-    int a = z + off[0], b = y + off[1], c = x + off[2];
-    if (a < 0 || a >= Z) a = wrap(a, Z);
-    if (b < 0 || b >= Y) b = wrap(b, Y);
-    if (c < 0 || c >= X) c = wrap(c, X);
-    return (a * Y + b) * X + c;
-}
-
 #define NRV ((NR + 7) / 8)   /* neighbours per pruned-sum row, in float8 vectors */
 #define HB (9 * NS > 64 ? 8 : 7)   /* the candidate set's table: 2^HB slots, at least twice the candidates */
 #define HS (1 << HB)
+
+/* The slot of window wnd in the candidate set's open-addressing table: where it is, or the
+ * empty slot (-1) where it would go. */
+inline int slot_of(const int *seen, int wnd)
+{
+    uint h = ((uint)wnd * 2654435761u) >> (32 - HB);
+    while (seen[h] >= 0 && seen[h] != wnd) h = (h + 1) & (HS - 1);
+    return h;
+}
 
 /* The pruned sum: for items item0 <= i < n_items, the same log_sums as parzen_groups but over
  * each item's candidate windows only (clsolid.ml.pruned): the windows similar[w][0..NS-1] of
@@ -256,7 +265,7 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
     int z = voxel / (Y * X), rem = voxel - z * Y * X;
     int y = rem / X, x = rem - y * X;
 
-    /* the distinct shifted sources, then their similar windows, sorted and distinct */
+    /* the distinct shifted sources */
     int base[9], nb = 0;
     for (int j = 0; j < 9; ++j) {
         int s = src[view * n_vox + shifted(z, y, x, Z, Y, X, coh_off + (view * 9 + j) * 3)];
@@ -274,9 +283,7 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
     for (int j = 0; j < nb; ++j) {
         __global const int *sim = similar + base[j] * NS;
         for (int q = 0; q < NS; ++q) {
-            int wnd = sim[q];
-            uint h = ((uint)wnd * 2654435761u) >> (32 - HB);
-            while (seen[h] >= 0 && seen[h] != wnd) h = (h + 1) & (HS - 1);
+            int wnd = sim[q], h = slot_of(seen, wnd);
             if (seen[h] == wnd) continue;
             seen[h] = wnd;
             cand[nc++] = wnd;
@@ -314,9 +321,7 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
         } else {   /* the sample: the site's window unless it is a candidate */
             int s = (int)((start + (long)(i - nc) * n_sites / n_sample) % n_sites);
             wnd = window_of[s];
-            uint h = ((uint)wnd * 2654435761u) >> (32 - HB);
-            while (seen[h] >= 0 && seen[h] != wnd) h = (h + 1) & (HS - 1);
-            if (seen[h] == wnd) continue;
+            if (seen[slot_of(seen, wnd)] == wnd) continue;
             e0 = log_rest;
         }
         __global const float8 *p = (__global const float8 *)(win_patches + (size_t)wnd * NRV * 8);
