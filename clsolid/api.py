@@ -18,7 +18,7 @@ METHODS = ("ml", "wl", "kopf", "chen-wang")
 OUTPUTS = ("values", "labels")
 #: Options of the search methods (clsolid.search.params.SearchParams).
 _SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order", "causal", "histogram", "candidates",
-                   "search")
+                   "specify", "search")
 #: Options of the search methods that are not parameters of the method (what to report).
 _SEARCH_REPORTS = ("site_map",)
 #: The neighbourhood side each method uses when none is given (ML: the thesis case; WL: ch5_np_common).
@@ -122,7 +122,9 @@ def synthesize(
         parallel; ``"lexicographic"``, ``"random"``, ``"morton"`` or ``"hilbert"``: one voxel
         at a time, for small blocks), ``causal`` (the L-shaped neighbourhood instead of the
         full square; default False), for ``kopf`` ``histogram`` (``"global"``, default, or
-        ``"slice"``: the re-weighting against the histogram of the voxel's slice), ``search``
+        ``"slice"``: the re-weighting against the histogram of the voxel's slice), for ``wl``
+        and ``kopf`` ``specify`` (after every pass, the block's grey levels mapped rank for
+        rank onto the exemplar's histogram; default True for ``kopf``, False for ``wl``), ``search``
         (``"exact"``, default: every exemplar site; ``"coherence"``: the k-coherence
         candidates of the voxel's neighbours' matches, several times faster), and
         ``site_map=True`` (with ``full_output``) adds the position

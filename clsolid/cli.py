@@ -57,7 +57,7 @@ def _add_synth(sub) -> None:
                         "kopf: Kopf et al. weights and histogram re-weighting; chen-wang: candidate sets, "
                         "index and position histograms, exemplar pixels copied "
                         "(options --iterations, --inner, --no-parent, --init, --order, --causal, --site-map; "
-                        "kopf: --rule, --histogram; chen-wang: --candidates, --source-map)")
+                        "wl, kopf: --[no-]specify; kopf: --rule, --histogram; chen-wang: --candidates, --source-map)")
     d = MLParams()  # one source for the defaults; argparse shows them with %(default)s
     p.add_argument("--heuristic", default=d.heuristic,
                    help=f"view combination: {', '.join(HEURISTICS)} or a thesis/paper tag (default %(default)s)")
@@ -79,6 +79,10 @@ def _add_synth(sub) -> None:
                         "random, Morton or Hilbert order (small blocks)")
     p.add_argument("--histogram", choices=HISTOGRAMS, default="global",
                    help="kopf: re-weight by the whole block's histogram (default) or by the voxel's slice's")
+    p.add_argument("--specify", action=argparse.BooleanOptionalAction, default=None,
+                   help="wl, kopf: after every pass, map the block's grey levels rank for rank onto the "
+                        "exemplar's histogram (categorical exemplars' phases are left alone; default: on for "
+                        "kopf, off for wl; --no-specify is the thesis's kopf)")
     p.add_argument("--causal", action="store_true",
                    help="search methods: match the L-shaped causal neighbourhood instead of the full square")
     p.add_argument("--search", choices=SEARCHES, default="exact",
@@ -270,7 +274,7 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "prune_similar",
             "prune_sample", "prune_min_weight", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram", "candidates",
-            "search", "site_map", "source_map")
+            "specify", "search", "site_map", "source_map")
 
 
 #: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
@@ -342,7 +346,7 @@ def cmd_synth(args) -> int:
         options = dict(iterations=args.iterations, inner=args.inner, parent=not args.no_parent,
                        init=args.init, rule=args.rule, order=args.order, causal=args.causal,
                        histogram=args.histogram, candidates=args.candidates, search=args.search,
-                       builtin_size=args.builtin_size)
+                       specify=args.specify, builtin_size=args.builtin_size)
         if args.site_map is not None:
             if args.site_map.suffix.lower() != ".png":
                 raise InputError(f"--site-map {args.site_map} must end in .png")

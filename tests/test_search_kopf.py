@@ -11,6 +11,7 @@ from clsolid.search.kopf import vote
 from clsolid.search.level import LevelHistogram
 from clsolid.search.match import CLMatcher, ReferenceMatcher
 from clsolid.search.params import SearchParams
+from clsolid.search.specify import specify_histogram
 
 
 def test_vote_takes_the_value_with_most_weight():
@@ -33,7 +34,9 @@ def test_level_histogram_bins_and_follows_changes():
 @pytest.mark.parametrize("name, views", [("composite3", 2), ("gravel", 3)])
 def test_opencl_run_matches_the_reference(device, name, views):
     ex = gallery_exemplar(name, 64)[:32, :32].astype(np.float64)
-    params = SearchParams(method="kopf", neighborhood=5, scales=2, iterations=2, views=views)
+    # without the histogram specification: it ranks the voxels, and a float32 difference in
+    # the last bits of two near-equal means swaps their ranks and so their values
+    params = SearchParams(method="kopf", neighborhood=5, scales=2, iterations=2, views=views, specify=False)
     ref = run_search(ex, (10, 12, 14), params, 3, ReferenceMatcher)[0]
     got = run_search(ex, (10, 12, 14), params, 3, lambda t: CLMatcher(device, t))[0]
     # weighted means: float32 distances move the weights in their last bits, so the values
@@ -46,7 +49,8 @@ def test_a_categorical_exemplar_stays_in_phases_and_a_grey_one_blends(device):
     vol = clsolid.synthesize(gallery_exemplar("composite3", 64), (16, 16, 16), method="kopf", iterations=2,
                              rng=1, device=device)
     assert set(np.unique(vol)) <= {0.0, 128.0, 255.0} and np.unique(vol).size == 3
-    grey = clsolid.synthesize("gravel", (16, 16, 16), method="kopf", iterations=2, rng=1, device=device)
+    grey = clsolid.synthesize("gravel", (16, 16, 16), method="kopf", iterations=2, specify=False, rng=1,
+                              device=device)
     assert np.unique(grey).size > 64  # weighted means of 32 levels
 
 
@@ -153,6 +157,18 @@ def test_cli_passes_the_rule(tmp_path, device):
     assert json.loads((tmp_path / "k.json").read_text())["params"]["rule"] == "overlap"
 
 
+@pytest.mark.parametrize("flag, want", [([], True), (["--no-specify"], False)])
+def test_cli_passes_specify(tmp_path, device, flag, want):
+    import json
+
+    from clsolid.cli import main
+
+    out = tmp_path / "k.npy"
+    assert main(["synth", "gravel", "-o", str(out), "--method", "kopf", "--shape", "8", "8", "8", "--scales", "1",
+                 "--neighborhood", "5", "--iterations", "1", "-q", *flag]) == 0
+    assert json.loads((tmp_path / "k.json").read_text())["params"]["specify"] is want
+
+
 # --------------------------------------------------------------------------- position histogram
 
 
@@ -227,3 +243,40 @@ def test_slice_histogram_option_runs_and_is_kopfs(device):
     assert set(np.unique(a)) <= {0.0, 255.0} and not np.array_equal(a, b)
     with pytest.raises(clsolid.InputError, match="histogram"):
         clsolid.synthesize(ex, (8, 8, 8), method="wl", histogram="slice")
+
+
+def test_specify_histogram_keeps_the_order_and_takes_the_exemplars_quantiles():
+    ex = np.arange(16.0).reshape(4, 4) * 10  # 0, 10, ..., 150
+    block = np.array([[[3.0, -1.0], [7.0, 2.0]], [[2.0, 9.0], [0.5, 5.0]]])  # 8 voxels, 2.0 twice
+    got = specify_histogram(block, ex)
+    # rank i of 8 takes the exemplar's sorted value at (i + 1/2) * 16 / 8 = 1, 3, 5, ...
+    want_by_rank = np.arange(1, 16, 2) * 10.0
+    ranks = np.argsort(np.argsort(block.ravel(), kind="stable"), kind="stable")
+    assert got.ravel().tolist() == want_by_rank[ranks].tolist()
+    assert got[0, 1, 1] < got[1, 0, 0]  # the tie (2.0 at flat 3 and 4) goes to the lower flat index first
+
+
+def test_specify_restores_the_grey_levels_that_blending_narrows(device):
+    ex = gallery_exemplar("gravel", 64)  # uint8
+    kw = dict(method="kopf", iterations=2, levels=None, rng=1, device=device)  # the exemplar as it is
+    plain = clsolid.synthesize(ex, (16, 16, 16), specify=False, **kw)  # the thesis's kopf
+    spec = clsolid.synthesize(ex, (16, 16, 16), **kw)  # kopf's default
+    assert plain.std() < 0.8 * ex.std()  # the means of matches pull every voxel to the middle
+    quantiles = np.sort(ex.ravel()).astype(np.float64)[((np.arange(spec.size) + 0.5) * ex.size / spec.size).astype(int)]
+    assert np.array_equal(np.sort(spec.ravel()), quantiles)
+
+
+def test_specify_leaves_a_categorical_exemplars_phases_alone(device):
+    vol = clsolid.synthesize(gallery_exemplar("composite3", 64), (16, 16, 16), method="kopf", iterations=2,
+                             specify=True, rng=1, device=device)
+    assert set(np.unique(vol)) == {0.0, 128.0, 255.0}
+
+
+@pytest.mark.parametrize("kw", [dict(method="chen-wang", specify=True), dict(method="kopf", specify=1)])
+def test_specify_is_checked(kw):
+    with pytest.raises(clsolid.InputError, match="specify"):
+        SearchParams(**kw)
+
+
+def test_specify_defaults_on_for_kopf_only():
+    assert [SearchParams(method=m).specify for m in ("wl", "kopf", "chen-wang")] == [False, True, False]

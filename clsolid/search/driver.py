@@ -27,6 +27,7 @@ from .level import Level, LevelHistogram
 from .match import candidate_sets
 from .params import SearchParams
 from .pyramid import gaussian_pyramid
+from .specify import specify_histogram
 
 #: Each method's rule for one conflict-free set: ``update(level, vol, coarse, voxels) -> searches``.
 UPDATES = {"wl": wl.update, "kopf": kopf.update, "chen-wang": chenwang.update}
@@ -107,6 +108,8 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
             else:
                 for c in set_order(n_sets, seed, level, it):
                     searches += update(ctx, vol, parent, sets[c])
+            if params.specify and ctx.values.size > kopf.MAX_PHASES:
+                _specify(ctx, vol, pyr[level])
             if progress is not None:
                 now = time.perf_counter()
                 progress(_report(params, level, it, shapes[level], now - t_iter, now - t0, pyr[level], vol))
@@ -152,6 +155,14 @@ def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape
         if coarser is not None:
             ctx.coherence.inherit(coarser)
     return ctx
+
+
+def _specify(ctx: Level, vol: np.ndarray, exemplar: np.ndarray) -> None:
+    """Give the block (in place) the level exemplar's histogram, and tell kopf's histogram."""
+    old = vol.ravel().copy()
+    vol[...] = specify_histogram(vol, exemplar)
+    if ctx.histogram is not None:
+        ctx.histogram.replace(old, vol.ravel(), np.arange(vol.size))
 
 
 def _start(exemplar: np.ndarray, shape: tuple[int, int, int], coarse: np.ndarray | None, init: str,

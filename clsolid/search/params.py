@@ -90,6 +90,14 @@ class SearchParams:
         site (default, the reference), or the accelerated one, among the k-coherence
         candidates that the voxel's 3 x 3 neighbours' matches propose
         (``clsolid.search.coherence``; exhaustive where they propose none).
+    specify : bool or None
+        ``wl`` and ``kopf``: after every pass, map the block's grey levels rank for rank
+        onto the level exemplar's histogram (``clsolid.search.specify``; a departure from
+        the thesis). Levels whose exemplar is categorical (at most ``kopf.MAX_PHASES``
+        values) are left alone: their voxels are phases, not means. None (default): True
+        for ``kopf``, whose re-weighting exists to keep the histogram and alone does not
+        (README, Choices), False for ``wl`` (the published form) and ``chen-wang`` (it
+        copies exemplar pixels).
     candidates : int
         ``chen-wang`` only: the size of each exemplar site's candidate set, the site itself
         included (the thesis's k; tested with 1, 5, 15, 25; default 15).
@@ -109,6 +117,7 @@ class SearchParams:
     histogram: str = "global"
     candidates: int = DEFAULT_CANDIDATES
     search: str = "exact"
+    specify: bool | None = None
 
     def __post_init__(self) -> None:
         one_of("method", self.method, METHODS)
@@ -138,6 +147,12 @@ class SearchParams:
             raise InputError(f"causal={self.causal!r} must be True or False")
         if self.causal and self.rule == "overlap":
             raise InputError("causal=True: Kopf's overlap rule needs every square whole (use rule='centres')")
+        if self.specify is None:
+            object.__setattr__(self, "specify", self.method == "kopf")
+        if not isinstance(self.specify, bool):
+            raise InputError(f"specify={self.specify!r} must be True, False or None (True for kopf)")
+        if self.specify and self.method == "chen-wang":
+            raise InputError("specify=True maps blended grey levels; chen-wang copies exemplar pixels, it has none")
         if not isinstance(self.parent, bool):
             raise InputError(f"parent={self.parent!r} must be True or False")
 
