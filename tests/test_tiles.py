@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from clsolid.core.tiles import Tiling, gather, split_axis
+from clsolid.ml.opencl import CLBackend
 
 SHAPE = (20, 16, 18)  # no two axes alike; tiles of 8: 7, 7, 6 by 8, 8 by 6, 6, 6
 
@@ -58,3 +59,9 @@ def test_group_finds_each_voxels_tile():
         seen.extend(part)
     assert sorted(seen) == sorted(voxels)
 
+
+def test_random_start_in_runs_is_the_same(device, monkeypatch):
+    pixels = np.arange(40.0).reshape(5, 8)
+    whole = CLBackend(device).init_volume(SHAPE, 3, pixels)
+    monkeypatch.setattr(type(device), "max_alloc", property(lambda self: 1000))  # 250 voxels a run
+    np.testing.assert_array_equal(CLBackend(device).init_volume(SHAPE, 3, pixels), whole)
