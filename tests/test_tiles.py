@@ -1,12 +1,28 @@
-"""Tiles (issue 12, point 2): the tile geometry."""
+"""Tiles (issue 12, point 2): the tile geometry, and a tiled run that gives the one-piece run's
+volume voxel for voxel, with its memory checked per tile."""
 
 import numpy as np
 import pytest
 
+import clsolid
+from clsolid.cli import EXIT_USAGE, main
 from clsolid.core.tiles import Tiling, gather, split_axis
+from clsolid.errors import DeviceMemoryError, InputError
+from clsolid.exemplar import quantise
+from clsolid.ml import tiled
+from clsolid.ml.driver import run_ml
+from clsolid.ml.model import build_scale
 from clsolid.ml.opencl import CLBackend
+from clsolid.ml.params import MLParams
+from clsolid.ml.tiled import TiledBackend, check_tile, halo_width, largest_tile
 
 SHAPE = (20, 16, 18)  # no two axes alike; tiles of 8: 7, 7, 6 by 8, 8 by 6, 6, 6
+
+
+@pytest.fixture(scope="module")
+def labels(brick_labels):
+    """A 16x16 corner of the brick at 8 levels: runs at 20^3 take a second."""
+    return quantise(brick_labels[:16, :16], 8)
 
 
 # -- geometry ------------------------------------------------------------------------
@@ -60,8 +76,111 @@ def test_group_finds_each_voxels_tile():
     assert sorted(seen) == sorted(voxels)
 
 
+def test_halo_is_the_farthest_read(labels):
+    for k, views, half in ((5, 2, 2), (3, 3, 1), (9, 3, 4)):
+        model = build_scale(labels, SHAPE, MLParams(neighborhood=k, views=views, scales=1), 0)
+        assert halo_width(model) == half == np.abs(model.union_offsets).max()
+
+
+# -- a tiled run is the one-piece run ------------------------------------------------------------
+
+CASES = [  # each relaxation with 2 and 3 views, exact and pruned; balance on (the default)
+    dict(relaxation="icm", views=2, likelihood="exact", tile=8),
+    dict(relaxation="icm", views=3, likelihood="pruned", tile=10),  # the coarse scale in one tile
+    dict(relaxation="gibbs", views=2, likelihood="pruned", tile=8),
+    dict(relaxation="gibbs", views=3, likelihood="exact", tile=10),
+    dict(relaxation="annealing", views=2, likelihood="exact", tile=7),
+    dict(relaxation="annealing", views=3, likelihood="pruned", tile=8),
+]
+
+
+def _params(case):
+    return MLParams(neighborhood=5, scales=2, sweeps=2,
+                    **{k: v for k, v in case.items() if k != "tile"})
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda c: "-".join(str(v) for v in c.values()))
+def test_tiled_run_is_the_one_piece_run(device, labels, case):
+    params = _params(case)
+    whole = CLBackend(device)
+    tiles = TiledBackend(CLBackend(device), case["tile"])
+    a = run_ml(labels, SHAPE, params, 7, whole)[0]
+    b = run_ml(labels, SHAPE, params, 7, tiles)[0]
+    assert len(tiles.tiling.tiles) > 1
+    np.testing.assert_array_equal(a, b)
+    assert (whole.exact_visits, whole.pruned_visits) == (tiles.exact_visits, tiles.pruned_visits)
+
+
+def test_a_halo_too_narrow_changes_the_volume(device, labels, monkeypatch):
+    """The equality above is no accident of the tiles: one voxel less of halo and it is gone."""
+    params = _params(CASES[2])
+    a = run_ml(labels, SHAPE, params, 7, CLBackend(device))[0]
+    narrow = halo_width
+    monkeypatch.setattr(tiled, "halo_width", lambda model: narrow(model) - 1)
+    b = run_ml(labels, SHAPE, params, 7, TiledBackend(CLBackend(device), 8))[0]
+    assert (a != b).mean() > 0.05
+
+
 def test_random_start_in_runs_is_the_same(device, monkeypatch):
     pixels = np.arange(40.0).reshape(5, 8)
     whole = CLBackend(device).init_volume(SHAPE, 3, pixels)
     monkeypatch.setattr(type(device), "max_alloc", property(lambda self: 1000))  # 250 voxels a run
     np.testing.assert_array_equal(CLBackend(device).init_volume(SHAPE, 3, pixels), whole)
+
+
+# -- memory, options, CLI, checkpoints ----------------------------------------------------------
+
+
+def test_memory_is_checked_per_tile(device, monkeypatch):
+    """One piece does not fit a 1 MiB buffer limit: the error names the largest tile that does."""
+    binary = (np.random.default_rng(2).random((16, 16)) > 0.5).astype(np.uint8)
+    monkeypatch.setattr(type(device), "max_alloc", property(lambda self: 1 << 20))
+    kw = dict(neighborhood=5, scales=2, rng=1, device=device, levels=2)
+    with pytest.raises(DeviceMemoryError, match=r"tile=(\d+) \(--tile \1\) is the largest that fits") as info:
+        clsolid.synthesize(binary, (64, 64, 64), **kw)
+    edge = int(str(info.value).split("tile=")[1].split(" ")[0])
+    params = MLParams(neighborhood=5, scales=2, levels=2)
+    models = [build_scale(binary, (64, 64, 64), params, level) for level in (1, 0)]
+    engine = CLBackend(device)
+    assert largest_tile(engine, models) == edge
+    check_tile(engine, models, edge)  # fits
+    with pytest.raises(DeviceMemoryError, match=f"tile={edge + 1} the device holds"):
+        check_tile(engine, models, edge + 1)
+    with pytest.raises(DeviceMemoryError, match="with tile=64 the device holds .* use a smaller tile"):
+        clsolid.synthesize(binary, (64, 64, 64), tile=64, **kw)
+
+
+def test_tile_option_is_checked(device):
+    with pytest.raises(InputError, match="tile=0 must be a positive integer"):
+        clsolid.synthesize("gravel", (8, 8, 8), tile=0, device=device)
+    with pytest.raises(InputError, match="tile=4 is for OpenCL devices"):
+        clsolid.synthesize("gravel", (8, 8, 8), tile=4, device="reference")
+
+
+def test_cli_tile_flag(tmp_path, device):
+    args = ["--shape", "12", "10", "14", "--neighborhood", "5", "--scales", "2", "--seed", "4", "--builtin-size",
+            "16", "--max-sweeps", "3", "-q"]
+    assert main(["synth", "gravel", "-o", str(tmp_path / "a.npy"), *args]) == 0
+    assert main(["synth", "gravel", "-o", str(tmp_path / "b.npy"), *args, "--tile", "5"]) == 0
+    np.testing.assert_array_equal(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
+    assert main(["synth", "gravel", "-o", str(tmp_path / "c.npy"), *args, "--tile", "0"]) == EXIT_USAGE
+    assert main(["synth", "gravel", "-o", str(tmp_path / "d.npy"), "--method", "wl", "--tile", "5", "-q"]) == EXIT_USAGE
+
+
+def test_tiled_checkpoint_resumes_identically(tmp_path, device):
+    """A tiled run's checkpoint holds the whole arrays: it resumes, tiled, to the one-piece volume."""
+    kw = dict(neighborhood=5, scales=2, rng=4, builtin_size=16, sweeps=3, likelihood="pruned", device=device)
+    whole = clsolid.synthesize("gravel", (12, 10, 14), **kw)
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def stop(info):
+        seen.append(info.sweep)
+        if len(seen) == 4:  # the second sweep of the finest scale
+            raise Stop
+
+    with pytest.raises(Stop):
+        clsolid.synthesize("gravel", (12, 10, 14), tile=5, checkpoint=tmp_path, progress=stop, **kw)
+    np.testing.assert_array_equal(clsolid.resume(tmp_path, device=device, tile=6), whole)

@@ -14,6 +14,7 @@ from ..core.philox import TAG_INIT, sample_tag, seed_key
 from ..core.probe import VECTOR_WIDTHS, probe
 from . import pruned
 from .pruned import source_of_site
+from .tiled import largest_tile
 
 _F4 = 4  # bytes per float32 / int32
 _INIT_RUN = 1 << 24  # most voxels the random start draws per launch
@@ -114,9 +115,17 @@ class CLBackend:
             raise DeviceMemoryError("all buffers together", total, self.device.global_mem, "global_mem_size")
 
     def prepare(self, models: list[ScaleModel]) -> None:
-        """Refuse, before allocating anything, a run whose buffers exceed the device limits."""
-        for model in models:
-            self.check_memory(model)
+        """Refuse, before allocating anything, a run whose buffers exceed the device limits;
+        where tiles would fit, the error says which (``tile=``, ``--tile``)."""
+        try:
+            for model in models:
+                self.check_memory(model)
+        except DeviceMemoryError as exc:
+            edge = largest_tile(self, models)
+            if edge is None:  # the exemplar's tables alone are too large
+                raise
+            raise exc.advised(f"synthesize it in tiles: tile={edge} (--tile {edge}) is the largest that fits, "
+                              "and gives the same volume") from None
 
     # -- kernels -----------------------------------------------------------------------
     def _kernels(self, model: ScaleModel, n_labels: int) -> dict:
