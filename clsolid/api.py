@@ -28,7 +28,7 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "prune_similar",
                "prune_sample", "prune_min_weight")
-_BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch")
+_BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
 _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
 
@@ -52,15 +52,23 @@ def _load(exemplar, levels, rng, options: dict):
 
 
 def make_backend(device, backend_options: dict):
-    """The reference back end for ``device="reference"``, else an OpenCL one."""
+    """The reference back end for ``device="reference"``, else an OpenCL one, tiled if
+    *backend_options* give a ``tile`` (see :mod:`clsolid.ml.tiled`)."""
+    options = dict(backend_options)
+    tile = options.pop("tile", None)
     if is_reference(device):
+        if tile is not None:
+            raise InputError(f"tile={tile!r} is for OpenCL devices: the reference back end holds the whole "
+                             "volume on the host; drop tile")
         from .ml.reference import ReferenceBackend
 
         return ReferenceBackend()
     from .ml.opencl import CLBackend
+    from .ml.tiled import TiledBackend
     from .core.device import select_device
 
-    return CLBackend(select_device(device), **backend_options)
+    engine = CLBackend(select_device(device), **options)
+    return engine if tile is None else TiledBackend(engine, tile)
 
 
 def synthesize(
@@ -196,6 +204,14 @@ def synthesize(
         thesis uses 1: see the README, Quality), ``builtin_size``, and OpenCL tuning: ``vector_width``,
         ``voxels_per_item``, ``local_size``, ``max_batch``.
 
+        Tiles (issue 12): ``tile`` (default None: the block in one piece) synthesises the block
+        a tile of at most this many voxels on a side at a time, each with a halo of the
+        neighbourhood's half-width; the device holds one tile's state, the host the whole
+        block's (``clsolid.ml.tiled``). The volume is the one-piece run's, voxel for voxel; it
+        costs moving each tile between host and device for every conflict-free set. A block
+        whose buffers do not fit the device in one piece is refused with a
+        ``DeviceMemoryError`` that names the largest tile that fits.
+
         Relaxation (thesis_spec §2.3): ``relaxation`` is ``"gibbs"`` (default: each visited
         voxel draws its label from the combined, normalised LCPDF; per-voxel temperatures,
         neighbour weights and stop rule as ICM), ``"icm"`` (the thesis: it takes the argmax) or
@@ -292,7 +308,8 @@ def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_outp
 
 
 def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | None = None,
-           output: str = "values", full_output: bool = False, checkpoint_every: float = 0.0):
+           output: str = "values", full_output: bool = False, checkpoint_every: float = 0.0,
+           tile: int | None = None):
     """Go on with a likelihood synthesis from its checkpoint folder, and keep checkpointing there.
 
     Parameters
@@ -304,6 +321,9 @@ def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | N
         the checkpoint's.
     checkpoint_every : float
         Seconds between the checkpoints written from now on (0: after every sweep).
+    tile : int, optional
+        Go on in tiles of at most this many voxels on a side (as :func:`synthesize`'s
+        ``tile``), whether or not the run began in tiles: the volume is the same.
 
     Returns
     -------
@@ -331,7 +351,7 @@ def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | N
     if expected is None or state.volume.size != int(np.prod(expected)):
         raise CheckpointError(f"{checkpoint}: the saved volume ({state.volume.size} voxels) does not fit scale "
                               f"{state.scale + 1} of a {shape} run: the checkpoint is corrupt")
-    backend = make_backend(device, {})
+    backend = make_backend(device, {} if tile is None else {"tile": tile})
     if backend.name != meta.get("device"):
         log.warning("resuming on %s a run begun on %s: the volume will differ from the uninterrupted one",
                     backend.name, meta.get("device"))

@@ -154,6 +154,10 @@ def _add_synth(sub) -> None:
                         "so that --resume can go on after a crash or Ctrl-C")
     p.add_argument("--checkpoint-every", type=float, default=0.0,
                    help="seconds between checkpoints (default 0: after every sweep; always at the end of a scale)")
+    p.add_argument("--tile", type=int, default=None, metavar="N",
+                   help="ml: synthesize the block in tiles of at most N voxels on a side, each with a halo, for "
+                        "blocks larger than the device holds; the same volume as in one piece, more slowly "
+                        "(default: one piece)")
     p.add_argument("--resume", type=Path, default=None,
                    help="go on with the run saved in this checkpoint folder (its exemplar, shape, settings and "
                         "seed; give only -o and output options) and keep checkpointing there")
@@ -272,7 +276,7 @@ def _tracker(levels: int, records: list):
 _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited",
             "insert_slices", "insert_spacing", "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "prune_similar",
-            "prune_sample", "prune_min_weight", "indices", "track")
+            "prune_sample", "prune_min_weight", "tile", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram", "candidates",
             "specify", "search", "site_map", "source_map")
 
@@ -280,7 +284,7 @@ _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal
 #: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
 _RESUME_FIXED = ("exemplar", "shape", "method", "preset", "heuristic", "neighborhood", "scales", "views", "levels",
                  "seed", "builtin_size", "checkpoint", "track") + _WL_ONLY + tuple(
-                     n for n in _ML_ONLY if n not in ("indices", "track"))
+                     n for n in _ML_ONLY if n not in ("indices", "track", "tile"))
 
 
 def _given(args, names) -> str:
@@ -314,6 +318,8 @@ def _ml_options(args) -> dict:
                    sweeps=args.sweeps, balance=args.balance, likelihood=args.likelihood,
                    prune_similar=args.prune_similar, prune_sample=args.prune_sample,
                    prune_min_weight=args.prune_min_weight)
+    if args.tile is not None:
+        options["tile"] = args.tile
     for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale
         values = getattr(args, name)
         if values is not None:
@@ -367,7 +373,7 @@ def cmd_synth(args) -> int:
     report = (lambda info: [h(info) for h in hooks]) if hooks else None
     if args.resume is not None:
         result = resume(args.resume, device=args.device, progress=report, full_output=True,
-                        checkpoint_every=args.checkpoint_every)
+                        checkpoint_every=args.checkpoint_every, tile=args.tile)
     else:
         if args.checkpoint is not None:
             options.update(checkpoint=args.checkpoint, checkpoint_every=args.checkpoint_every)

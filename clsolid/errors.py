@@ -16,15 +16,25 @@ class NoDeviceError(ClsolidError, RuntimeError):
 
 
 class DeviceMemoryError(ClsolidError, MemoryError):
-    """A buffer would exceed the device's allocation limits (checked before allocating)."""
+    """A buffer would exceed the device's allocation limits (checked before allocating).
 
-    def __init__(self, buffer: str, nbytes: int, limit: int, what: str = "max_mem_alloc_size"):
-        self.buffer, self.nbytes, self.limit = buffer, int(nbytes), int(limit)
+    *what* names the limit; *advice* says what to do (by default: a smaller shape, fewer
+    grey levels or another device).
+    """
+
+    ADVICE = "use a smaller shape or fewer grey levels, or choose a device with more memory (--device)"
+
+    def __init__(self, buffer: str, nbytes: int, limit: int, what: str = "max_mem_alloc_size",
+                 advice: str | None = None):
+        self.buffer, self.nbytes, self.limit, self.what = buffer, int(nbytes), int(limit), what
         super().__init__(
             f"buffer '{buffer}' needs {nbytes / 2**20:.1f} MiB ({nbytes} bytes) but the device's "
-            f"{what} is {limit / 2**20:.1f} MiB ({limit} bytes); use a smaller shape or fewer "
-            "grey levels, or choose a device with more memory (--device)"
+            f"{what} is {limit / 2**20:.1f} MiB ({limit} bytes); {advice or self.ADVICE}"
         )
+
+    def advised(self, advice: str) -> "DeviceMemoryError":
+        """The same error with other *advice*."""
+        return DeviceMemoryError(self.buffer, self.nbytes, self.limit, self.what, advice)
 
 
 class KernelBuildError(ClsolidError, RuntimeError):

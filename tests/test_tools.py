@@ -92,7 +92,8 @@ def test_prune_error_reports_every_sweep(capsys, device, tool):
 
 
 def test_bench_scale_prints_a_row_per_run(capsys, device, tool):
-    tool("bench_scale").main(["--cases", "64:8", "--names", "porous50", "--device",
+    tool("bench_scale").main(["--cases", "64:8", "--names", "porous50", "--tile", "5", "--device",
                               device.device.name.strip()[:8]])
     out = capsys.readouterr().out
     assert "GFLOP/s" in out and "| porous50 | 64² → 8³ | exact |" in out and "| porous50 | 64² → 8³ | pruned |" in out
+    assert "tiles of 5" in out and out.count("| yes |") == 2  # a tiled run is the one-piece run

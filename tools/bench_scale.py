@@ -7,10 +7,13 @@ finest scale (it should stay flat as the cube grows; with the exact sum it grows
 exemplar). A run that passes ``--budget`` seconds is stopped there, and its figures are
 those of the sweeps it finished (marked "stopped"). NumPy's float32 matmul rate, measured in
 the same run, is the machine's reference. Timings only: nothing here asserts on speed.
-Not measured, because clsolid cannot do them yet: tiled runs (512^3) and Dask workers.
+With ``--tile N`` every case runs again in tiles of N (clsolid.ml.tiled), and the table adds
+its time and whether its volume is the one-piece run's (it must be). Not measured, because
+clsolid cannot do them yet: Dask workers.
 
     python tools/bench_scale.py                                   # 64:64 and 128:128, both sums
     python tools/bench_scale.py --cases 256:256 --likelihoods pruned --budget 1800
+    python tools/bench_scale.py --cases 50:64 --names porous50 --likelihoods pruned --tile 32
 """
 
 from __future__ import annotations
@@ -29,8 +32,9 @@ class _Stop(Exception):
     """Raised from the progress callback when a run passes its budget."""
 
 
-def run(image: np.ndarray, side: int, likelihood: str, budget: float, device) -> dict:
-    """Grow a *side*^3 cube; return the time, sweeps and finest-scale cost per voxel visit."""
+def run(image: np.ndarray, side: int, likelihood: str, budget: float, device, tile: int | None = None) -> dict:
+    """Grow a *side*^3 cube (in tiles of *tile*, if given); return the volume (None if stopped),
+    the time, sweeps and finest-scale cost per voxel visit."""
     sweeps: list = []
     t0 = time.perf_counter()
 
@@ -41,14 +45,16 @@ def run(image: np.ndarray, side: int, likelihood: str, budget: float, device) ->
         if time.perf_counter() - t0 > budget:
             raise _Stop
 
-    stopped = False
+    stopped, volume = False, None
+    options = {} if tile is None else {"tile": tile}
     try:
-        clsolid.synthesize(image, (side,) * 3, rng=1, device=device, likelihood=likelihood, progress=progress)
+        volume = clsolid.synthesize(image, (side,) * 3, rng=1, device=device, likelihood=likelihood,
+                                    progress=progress, **options)
     except _Stop:
         stopped = True
     finest = [s for s in sweeps if s["scale"] == s["n_scales"]]
     visits = sum(s["visited"] for s in finest)
-    return {"seconds": time.perf_counter() - t0, "stopped": stopped, "sweeps": len(sweeps),
+    return {"volume": volume, "seconds": time.perf_counter() - t0, "stopped": stopped, "sweeps": len(sweeps),
             "finest_sweeps": len(finest),
             "per_visit_us": 1e6 * sum(s["seconds"] for s in finest) / visits if visits else float("nan")}
 
@@ -61,11 +67,14 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--likelihoods", nargs="+", default=["exact", "pruned"], choices=("exact", "pruned"))
     ap.add_argument("--budget", type=float, default=900.0, help="seconds after which a run is stopped (900)")
     ap.add_argument("--device", default=None)
+    ap.add_argument("--tile", type=int, default=None, metavar="N",
+                    help="also run every case in tiles of N voxels a side, and compare the volumes")
     args = ap.parse_args(argv)
     device = clsolid.select_device(args.device)
     print(f"{device.name}; matmul reference {matmul_gflops():.1f} GFLOP/s (float32, NumPy, this run)")
-    print("| exemplar | case | likelihood | time (s) | sweeps (finest) | finest scale, us per voxel visit |")
-    print("|---|---|---|---|---|---|")
+    tiled = "" if args.tile is None else f" tiles of {args.tile}: time (s) | same volume |"
+    print(f"| exemplar | case | likelihood | time (s) | sweeps (finest) | finest scale, us per voxel visit |{tiled}")
+    print("|---|---|---|---|---|---|" + ("---|---|" if tiled else ""))
     for case in args.cases:
         ex_side, cube = (int(v) for v in case.split(":"))
         for name in args.names:
@@ -73,8 +82,14 @@ def main(argv: list[str] | None = None) -> None:
             for likelihood in args.likelihoods:
                 r = run(image, cube, likelihood, args.budget, device)
                 note = " (stopped)" if r["stopped"] else ""
-                print(f"| {name} | {ex_side}² → {cube}³ | {likelihood} | {r['seconds']:.1f}{note} | "
-                      f"{r['sweeps']} ({r['finest_sweeps']}) | {r['per_visit_us']:.1f} |", flush=True)
+                row = (f"| {name} | {ex_side}² → {cube}³ | {likelihood} | {r['seconds']:.1f}{note} | "
+                       f"{r['sweeps']} ({r['finest_sweeps']}) | {r['per_visit_us']:.1f} |")
+                if args.tile is not None:
+                    t = run(image, cube, likelihood, args.budget, device, args.tile)
+                    same = "?" if r["volume"] is None or t["volume"] is None else (
+                        "yes" if np.array_equal(r["volume"], t["volume"]) else "NO")
+                    row += f" {t['seconds']:.1f}{' (stopped)' if t['stopped'] else ''} | {same} |"
+                print(row, flush=True)
 
 
 if __name__ == "__main__":

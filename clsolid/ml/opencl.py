@@ -14,8 +14,10 @@ from ..core.philox import TAG_INIT, sample_tag, seed_key
 from ..core.probe import VECTOR_WIDTHS, probe
 from . import pruned
 from .pruned import source_of_site
+from .tiled import largest_tile
 
 _F4 = 4  # bytes per float32 / int32
+_INIT_RUN = 1 << 24  # most voxels the random start draws per launch
 
 
 def group_tables(model: ScaleModel, vw: int):
@@ -82,9 +84,11 @@ class CLBackend:
         self.exact_visits = self.pruned_visits = 0  # voxel visits by sum, in the pruned mode
 
     # -- memory ------------------------------------------------------------------------
-    def buffer_sizes(self, model: ScaleModel, n_labels: int) -> dict[str, int]:
-        """Bytes of every device buffer a scale needs."""
-        n_vox = int(np.prod(model.shape))
+    def buffer_sizes(self, model: ScaleModel, n_labels: int, block=None) -> dict[str, int]:
+        """Bytes of every device buffer a scale needs, its state (volume, temperatures,
+        sources) held for a *block* ``(Z, Y, X)``: the whole volume (default), or one tile
+        with its halo (:mod:`clsolid.ml.tiled`)."""
+        n_vox = int(np.prod(model.shape if block is None else block))
         views, nr = model.offsets.shape[:2]
         chunks = int(np.sum(-(-np.bincount(np.unique(model.centres, return_inverse=True)[1]) // self.vw)))
         batch = min(self.max_batch, n_vox)
@@ -94,20 +98,34 @@ class CLBackend:
             "exemplar patches": chunks * nr * self.vw * _F4,
             "group log-sums": batch * views * self._pad(n_labels) * _F4,
             "voxel indices": batch * _F4,
+            "packed state": batch * (2 + views) * _F4,
             "balance scores": n_score_slots(model.shape) * n_labels * _F4,
             "sources": views * n_vox * _F4,
         }
 
+    def check_memory(self, model: ScaleModel, block=None) -> None:
+        """Refuse (:class:`~clsolid.errors.DeviceMemoryError`), before allocating anything, a
+        scale whose buffers (see :meth:`buffer_sizes`) exceed the device limits."""
+        sizes = self.buffer_sizes(model, model.labels.size, block)
+        for name, nbytes in sizes.items():
+            if nbytes > self.device.max_alloc:
+                raise DeviceMemoryError(name, nbytes, self.device.max_alloc)
+        total = sum(sizes.values())
+        if total > self.device.global_mem:
+            raise DeviceMemoryError("all buffers together", total, self.device.global_mem, "global_mem_size")
+
     def prepare(self, models: list[ScaleModel]) -> None:
-        """Refuse, before allocating anything, a run whose buffers exceed the device limits."""
-        for model in models:
-            sizes = self.buffer_sizes(model, model.labels.size)
-            for name, nbytes in sizes.items():
-                if nbytes > self.device.max_alloc:
-                    raise DeviceMemoryError(name, nbytes, self.device.max_alloc)
-            total = sum(sizes.values())
-            if total > self.device.global_mem:
-                raise DeviceMemoryError("all buffers together", total, self.device.global_mem, "global_mem_size")
+        """Refuse, before allocating anything, a run whose buffers exceed the device limits;
+        where tiles would fit, the error says which (``tile=``, ``--tile``)."""
+        try:
+            for model in models:
+                self.check_memory(model)
+        except DeviceMemoryError as exc:
+            edge = largest_tile(self, models)
+            if edge is None:  # the exemplar's tables alone are too large
+                raise
+            raise exc.advised(f"synthesize it in tiles: tile={edge} (--tile {edge}) is the largest that fits, "
+                              "and gives the same volume") from None
 
     # -- kernels -----------------------------------------------------------------------
     def _kernels(self, model: ScaleModel, n_labels: int) -> dict:
@@ -133,46 +151,57 @@ class CLBackend:
 
     # -- the back-end interface ----------------------------------------------------------
     def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
-        """Random exemplar pixels, drawn by Philox on (seed, x, y, z) in a kernel."""
+        """Random exemplar pixels, drawn by Philox on (seed, x, y, z) in a kernel, in runs of
+        voxels that fit one buffer (the volume may be larger than the device holds)."""
         import pyopencl as cl
 
         n = int(np.prod(shape))
-        if n * _F4 > self.device.max_alloc:
-            raise DeviceMemoryError("volume", n * _F4, self.device.max_alloc)
         k = programs.build(self.device, "core/init.cl")
         out = np.empty(n, np.float32)
-        buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, out.nbytes)
+        run = max(1, min(n, self.device.max_alloc // _F4, _INIT_RUN))
+        buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, run * _F4)
         key = seed_key(seed)
         px = self._buf(pixels.astype(np.float32).ravel())
-        k["init_random"](self.device.queue, (self._global(n),), (self.local,), buf,
-                         np.int32(shape[0]), np.int32(shape[1]), np.int32(shape[2]),
-                         np.uint32(key[0]), np.uint32(key[1]), np.uint32(TAG_INIT), px, np.uint32(pixels.size))
-        cl.enqueue_copy(self.device.queue, out, buf)
+        for first in range(0, n, run):
+            part = out[first: first + run]
+            k["init_random"](self.device.queue, (self._global(part.size),), (self.local,), buf,
+                             np.int32(shape[0]), np.int32(shape[1]), np.int32(shape[2]), np.int64(first),
+                             np.int32(part.size), np.uint32(key[0]), np.uint32(key[1]), np.uint32(TAG_INIT), px,
+                             np.uint32(pixels.size))
+            cl.enqueue_copy(self.device.queue, part, buf)
         return out.reshape(shape).astype(np.float64)
 
     def start_scale(self, model: ScaleModel, vol: np.ndarray, temp: np.ndarray, params: MLParams,
                     sources: np.ndarray | None = None) -> None:
         """Upload a scale's tables and state; *sources* ``(views, voxels)``: each voxel's source
         site per view (a resumed run's; default: none yet, -1)."""
+        self.load_scale(model, params)
+        self.load_state(vol, temp, sources)
+
+    def load_scale(self, model: ScaleModel, params: MLParams, block=None) -> None:
+        """Upload a scale's tables and allocate its buffers, the state's for a *block*
+        ``(Z, Y, X)``: the whole volume (default), or the largest tile with its halo. The
+        memory is checked first. :meth:`load_state` then gives the state."""
         import pyopencl as cl
 
         n_labels = model.labels.size
-        self.prepare([model])
+        block = tuple(model.shape if block is None else block)
+        self.check_memory(model, block)
         self.model, self.params = model, params
+        self.capacity = int(np.prod(block))
         self.k = self._kernels(model, n_labels)
         patches, chunk_group, chunk_valid, gvals, chunk_site = group_tables(model, self.vw)
         canon = source_of_site(model)
         self.chunk_site = self._buf(canon[chunk_site])  # the source each lane records
-        views, n_vox = model.offsets.shape[0], int(np.prod(model.shape))
-        if sources is None:
-            sources = np.full((views, n_vox), -1, np.int32)
-        self.src = self._buf(np.asarray(sources, np.int32).reshape(views, n_vox), writable=True)
-        self._src = np.empty((views, n_vox), np.int32)
+        views = model.offsets.shape[0]
+        mf, ctx = cl.mem_flags, self.device.context
+        self.vol_buf = cl.Buffer(ctx, mf.READ_WRITE, self.capacity * _F4)
+        self.temp_buf = cl.Buffer(ctx, mf.READ_WRITE, self.capacity * _F4)
+        self.src = cl.Buffer(ctx, mf.READ_WRITE, views * self.capacity * _F4)
+        self.batch = batch = min(self.max_batch, self.capacity)
         if params.likelihood == "pruned":
-            self._start_pruned(pruned.Pruning(model, params, canon), gvals)
+            self._start_pruned(pruned.Pruning(model, params, canon), gvals, batch)
         self.n_groups, self.n_chunks = gvals.size, chunk_group.size
-        self.vol_buf = self._buf(vol.astype(np.float32), writable=True)
-        self.temp_buf = self._buf(temp.astype(np.float32), writable=True)
         self.patches = self._buf(patches)
         self.chunk_group, self.chunk_valid = self._buf(chunk_group), self._buf(chunk_valid)
         self.gvals = self._buf(gvals)
@@ -183,21 +212,44 @@ class CLBackend:
         self.labels = self._buf(model.labels.astype(np.float32))
         self.offsets = self._buf(model.offsets.astype(np.int32))
         self.union = self._buf(model.union_offsets.astype(np.int32))
-        views = model.offsets.shape[0]
-        batch = min(self.max_batch, int(np.prod(model.shape)))
-        mf = cl.mem_flags
-        self.vox_buf = cl.Buffer(self.device.context, mf.READ_ONLY, batch * _F4)
-        self.sums = cl.Buffer(self.device.context, mf.READ_WRITE, batch * views * self._pad(n_labels) * _F4)
+        self.vox_buf = cl.Buffer(ctx, mf.READ_ONLY, batch * _F4)
+        self.packed = (cl.Buffer(ctx, mf.WRITE_ONLY, 2 * batch * _F4),
+                       cl.Buffer(ctx, mf.WRITE_ONLY, views * batch * _F4))
+        self.sums = cl.Buffer(ctx, mf.READ_WRITE, batch * views * self._pad(n_labels) * _F4)
         self.kfactor = np.float32(1.0 / (2.0 * model.bandwidth**2))
-        self._temp = np.empty(model.shape, np.float32)
-        self._vol = np.empty(model.shape, np.float32)
-        self.bias = cl.Buffer(self.device.context, mf.READ_ONLY, self._pad(n_labels) * _F4)
+        self.bias = cl.Buffer(ctx, mf.READ_ONLY, self._pad(n_labels) * _F4)
+        # The balance's scores are the whole volume's, whichever block the state holds.
         self._scores = np.zeros((n_score_slots(model.shape), n_labels), np.float32)
         self.scores_buf = self._buf(self._scores, writable=True)
         self.score_args = (self.scores_buf, np.int32(score_stride(model.shape)))
+        self._vol = self._temp = self._src = None  # host copies of the state, made when first read
         self.start_sweep(0, 0, 1.0, np.zeros(n_labels))
 
-    def _start_pruned(self, pruning: pruned.Pruning, gvals: np.ndarray) -> None:
+    def load_state(self, vol: np.ndarray, temp: np.ndarray, sources: np.ndarray | None = None,
+                   origin: tuple[int, int, int] = (0, 0, 0)) -> None:
+        """Upload the state the next updates work on: the volume and temperatures of a block
+        (the whole volume, or a tile with its halo whose first voxel lies at *origin* of the
+        whole, see :mod:`clsolid.core.tiles`), and each voxel's sources ``(views, voxels)``
+        (default: none yet, -1). Updates take the block's flat indices."""
+        import pyopencl as cl
+
+        q, views = self.device.queue, self.model.offsets.shape[0]
+        self.block = tuple(int(n) for n in np.shape(vol))
+        self.n_block = int(np.prod(self.block))
+        if self.n_block > self.capacity:
+            raise ValueError(f"a {self.block} block does not fit the buffers made for {self.capacity} voxels")
+        self.placement = tuple(np.int32(v) for v in tuple(origin) + tuple(self.model.shape))
+        if sources is None:
+            sources = np.full((views, self.n_block), -1, np.int32)
+        cl.enqueue_copy(q, self.vol_buf, np.ascontiguousarray(vol, np.float32))
+        cl.enqueue_copy(q, self.temp_buf, np.ascontiguousarray(temp, np.float32))
+        cl.enqueue_copy(q, self.src, np.ascontiguousarray(np.reshape(sources, (views, self.n_block)), np.int32))
+        if self._vol is None or self._vol.shape != self.block:
+            self._vol = np.empty(self.block, np.float32)
+            self._temp = np.empty(self.block, np.float32)
+            self._src = np.empty((views, self.n_block), np.int32)
+
+    def _start_pruned(self, pruning: pruned.Pruning, gvals: np.ndarray, batch: int) -> None:
         """The pruned sum's tables: distinct windows, their similar sets, coherence offsets."""
         import pyopencl as cl
 
@@ -209,13 +261,12 @@ class CLBackend:
         nr = model.patches.shape[0]
         rows = np.zeros((first.size, -(-nr // 8) * 8), np.float32)  # whole float8 vectors, zero-padded
         rows[:, :nr] = model.patches.T[first]
-        self.pruned = (self._buf(pruning.voxel_offsets), self._buf(pruning.exemplar_offsets), self.src, np.int32(int(np.prod(model.shape))),
-                       self._buf(table.window_of), self._buf(similar.astype(np.int32)),
-                       self._buf(rows), self._buf(group),
-                       self._buf(np.log(table.count).astype(np.float32)), self._buf(table.source),
-                       np.int32(table.grid[0]), np.int32(table.grid[1]))
-        self.flags_buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY,
-                                   min(self.max_batch, int(np.prod(model.shape))) * _F4)
+        self.coherence = (self._buf(pruning.voxel_offsets), self._buf(pruning.exemplar_offsets))
+        self.windows = (self._buf(table.window_of), self._buf(similar.astype(np.int32)),
+                        self._buf(rows), self._buf(group),
+                        self._buf(np.log(table.count).astype(np.float32)), self._buf(table.source),
+                        np.int32(table.grid[0]), np.int32(table.grid[1]))
+        self.flags_buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, batch * _F4)
 
     def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
         """Random stream (Philox key *seed*, counter tag *tag*), global temperature *t_in*
@@ -254,15 +305,16 @@ class CLBackend:
                 self.vol_buf, self.temp_buf, *self._shape_args(), self.vox_buf, np.int32(n_exact * views),
                 np.int32(views), self.offsets, self.patches, self.chunk_group, self.chunk_valid,
                 np.int32(self.n_chunks), np.int32(self.n_groups), self.kfactor, self.sums,
-                self.chunk_site, self.src, np.int32(int(np.prod(m.shape))))
+                self.chunk_site, self.src, np.int32(self.n_block))
         if self.params.likelihood == "pruned":
             self.exact_visits += n_exact
             self.pruned_visits += voxels.size - n_exact
         if n_exact < voxels.size:
             self.k["parzen_candidates"](
                 q, (self._global(n_items - n_exact * views, self.item_local),), (self.item_local,),
-                self.vol_buf, self.temp_buf, *self._shape_args(), self.vox_buf, np.int32(n_exact * views),
-                np.int32(n_items), np.int32(views), self.offsets, *self.pruned,
+                self.vol_buf, self.temp_buf, *self._shape_args(), *self.placement, self.vox_buf,
+                np.int32(n_exact * views), np.int32(n_items), np.int32(views), self.offsets, *self.coherence,
+                self.src, np.int32(self.n_block), *self.windows,
                 np.int32(min(self.params.prune_sample, m.n_sites)), *self.sample_key,
                 np.int32(self.n_groups), self.kfactor, self.sums)
         return n_items
@@ -277,7 +329,7 @@ class CLBackend:
         self.k["prune_flags"](q, (self._global(voxels.size, self.item_local),), (self.item_local,), self.temp_buf,
                               *self._shape_args(), self.vox_buf, np.int32(voxels.size),
                               np.int32(m.offsets.shape[0]), self.offsets, self.src,
-                              np.int32(int(np.prod(m.shape))), np.float32(self.params.prune_min_weight),
+                              np.int32(self.n_block), np.float32(self.params.prune_min_weight),
                               np.int32(self.params.prune_sample == 0), self.flags_buf)
         cl.enqueue_copy(q, flags, self.flags_buf)
         exact = flags.astype(bool)
@@ -286,20 +338,40 @@ class CLBackend:
         return int(exact.sum())
 
     def _shape_args(self) -> tuple:
-        return tuple(np.int32(s) for s in self.model.shape)
+        return tuple(np.int32(s) for s in self.block)
 
     def _update_batch(self, voxels: np.ndarray) -> None:
         m = self.model
         self._parzen(voxels)
         self.k["decide"](
             self.device.queue, (self._global(voxels.size, self.item_local),), (self.item_local,),
-            self.vol_buf, self.temp_buf, *self._shape_args(), self.vox_buf, np.int32(voxels.size),
-            np.int32(m.offsets.shape[0]), self.sums, np.int32(self.n_groups), self.gvals, self.kern, self.labels,
-            np.int32(m.labels.size), self.kfactor, self.union, np.int32(m.union_offsets.shape[0]),
-            np.float32(self.params.xi), np.int32(self.params.heuristic_code), *self.sweep_args, *self.score_args)
+            self.vol_buf, self.temp_buf, *self._shape_args(), *self.placement, self.vox_buf,
+            np.int32(voxels.size), np.int32(m.offsets.shape[0]), self.sums, np.int32(self.n_groups), self.gvals,
+            self.kern, self.labels, np.int32(m.labels.size), self.kfactor, self.union,
+            np.int32(m.union_offsets.shape[0]), np.float32(self.params.xi), np.int32(self.params.heuristic_code), *self.sweep_args, *self.score_args)
+
+    def read_voxels(self, voxels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The values, temperatures and sources ``(views, m)`` of some voxels of the block (its
+        flat indices): what a tile gives back after updating them."""
+        import pyopencl as cl
+
+        q, views, m = self.device.queue, self.model.offsets.shape[0], np.size(voxels)
+        values, sources = np.empty((2, m), np.float32), np.empty((views, m), np.int32)
+        for i in range(0, m, self.batch):
+            batch = np.ascontiguousarray(voxels[i: i + self.batch], np.int32)
+            n = batch.size
+            cl.enqueue_copy(q, self.vox_buf, batch)
+            self.k["pack_state"](q, (self._global(n),), (self.local,), self.vol_buf, self.temp_buf, self.src,
+                                 np.int32(self.n_block), np.int32(views), self.vox_buf, np.int32(n), *self.packed)
+            part_values, part_sources = np.empty((2, n), np.float32), np.empty((views, n), np.int32)
+            cl.enqueue_copy(q, part_values, self.packed[0])
+            cl.enqueue_copy(q, part_sources, self.packed[1])
+            values[:, i: i + n], sources[:, i: i + n] = part_values, part_sources
+        return values[0], values[1], sources
 
     def sources(self) -> np.ndarray:
-        """Each voxel's source site per view, ``(views, voxels)`` (-1: none yet)."""
+        """Each voxel's source site per view, ``(views, voxels)`` (-1: none yet), of the block
+        the state holds (the whole volume, or a tile)."""
         import pyopencl as cl
 
         cl.enqueue_copy(self.device.queue, self._src, self.src)

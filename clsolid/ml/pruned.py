@@ -35,6 +35,8 @@ from .model import ScaleModel, view_offsets, wrapped_coords
 from .params import VIEW_AXES, MLParams
 
 _BLOCK = 1024  # windows per block of the similarity search (bounds its memory)
+#: How far from a voxel the pruned sum reads sources: its 3 x 3 in-slice window in each view.
+COHERENCE_REACH = 1
 
 
 @dataclass
@@ -121,7 +123,7 @@ def coherence_offsets(model: ScaleModel, views: tuple[str, ...]) -> tuple[np.nda
     """The voxel and its 8 in-slice neighbours in each view: ``(views, 9, 3)`` (dz, dy, dx)
     offsets and ``(views, 9, 2)`` exemplar (row, column) offsets, paired as in
     :func:`clsolid.ml.model.view_offsets` (whose 3 x 3 window, centre put back, they are)."""
-    vox = np.stack([np.insert(view_offsets(view, 1), 4, 0, axis=0) for view in views])
+    vox = np.stack([np.insert(view_offsets(view, COHERENCE_REACH), 4, 0, axis=0) for view in views])
     ex = np.stack([vox[i][:, list(VIEW_AXES[view])] for i, view in enumerate(views)])
     return vox.astype(np.int32), ex.astype(np.int32)
 

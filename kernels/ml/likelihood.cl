@@ -4,6 +4,11 @@
  * Global id 0 enumerates work items (voxels or voxel-views of the current batch); the
  * host passes the batch's flat voxel indices, so sizes are kernel arguments and one
  * build serves every shape. Neighbours wrap around (toroidal, tileable output).
+ * The buffers may hold one tile of a larger block (clsolid.ml.tiled), its halo included: the
+ * kernels that draw random numbers or keep scores also take where the tile's first voxel
+ * sits in the whole block (oz, oy, ox) and the block's shape (GZ, GY, GX), and use the
+ * voxel's coordinates in the whole block (whole_coords), so a tiled run draws exactly what a
+ * one-piece run does. One piece: origin 0, whole shape = (Z, Y, X).
  *
  * Compile-time constants (-D):
  *   NR     neighbours per view (k*k - 1)
@@ -93,6 +98,13 @@ inline int neighbour(int voxel, int Y, int X, int Z, __global const int *off)
     int z = voxel / (Y * X), rem = voxel - z * Y * X;
     int y = rem / X, x = rem - y * X;
     return shifted(z, y, x, Z, Y, X, off);
+}
+
+/* The coordinates (x, y, z, 0) in the whole GZ x GY x GX block of voxel (z, y, x) of a tile
+ * whose first voxel sits at (oz, oy, ox) of it (on the torus): the Philox counter's words. */
+inline uint4 whole_coords(int z, int y, int x, int oz, int oy, int ox, int GZ, int GY, int GX)
+{
+    return (uint4)((x + ox) % GX, (y + oy) % GY, (z + oz) % GZ, 0u);
 }
 
 /* Fold a vector of distances into one group's running (minimum, rescaled sum). */
@@ -243,12 +255,13 @@ inline int slot_of(const int *seen, int wnd)
  * weighted by their number, win_logc = log count); win_patches rows hold NRV float8 vectors,
  * zero-padded. The nearest candidate's win_source becomes the voxel's source in that view
  * (the lowest site with its neighbourhood). The rest of the sum is estimated from n_sample
- * sites, every (n_sites / n_sample)-th from a start drawn by Philox (counter (x, y, z, tag),
- * word view), each weighted n_sites / n_sample; a sampled site of a candidate window is
- * already counted and is skipped (clsolid.ml.pruned.term_weights).
+ * sites, every (n_sites / n_sample)-th from a start drawn by Philox (counter (x, y, z, tag)
+ * with the voxel's whole-block coordinates, word view), each weighted n_sites / n_sample; a
+ * sampled site of a candidate window is already counted and is skipped
+ * (clsolid.ml.pruned.term_weights).
  */
 __kernel void parzen_candidates(__global const float *vol, __global const float *temp,
-                                int Z, int Y, int X,
+                                int Z, int Y, int X, int oz, int oy, int ox, int GZ, int GY, int GX,
                                 __global const int *voxels, int item0, int n_items, int n_views,
                                 __global const int *offsets, __global const int *coh_off,
                                 __global const int *coh_shift, __global int *src, int n_vox,
@@ -308,7 +321,8 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
     int best_w = 0;
     int n_sites = grid_rows * grid_cols, start = 0;
     if (n_sample) {
-        philox4x32_ctr_t ctr = {{(uint)x, (uint)y, (uint)z, tag}};
+        uint4 g = whole_coords(z, y, x, oz, oy, ox, GZ, GY, GX);
+        philox4x32_ctr_t ctr = {{g.x, g.y, g.z, tag}};
         philox4x32_key_t key = {{key0, key1}};
         start = mul_hi(philox4x32(ctr, key).v[view], (uint)n_sites);
     }
@@ -485,16 +499,19 @@ inline int nearest_label(__global const float *labels, int n, float x)
  * relaxation: 0 ICM (argmax), 1 Gibbs (a draw from the combined, normalised LCPDF),
  * 2 annealing (a uniform proposal, accepted as in accept()). bias[label] (NLV*VW, 0 past the
  * labels) is added to the combined log score (h2) or to each view's (h1): the balance term.
- * The random words come from Philox4x32-10 keyed (key0, key1), counter (x, y, z, tag):
+ * The random words come from Philox4x32-10 keyed (key0, key1), counter (x, y, z, tag) with
+ * the voxel's whole-block coordinates:
  *   Gibbs      word v draws view v (h1), word 0 the combined LCPDF (h2);
  *   annealing  word 0 the proposal (multiply-high onto the labels), word 1 + v the q of
  *              view v (h1), word 1 the q of the combined score (h2).
  * h1 heuristics combine the per-view solutions: the argmax, a draw, or the proposal where
  * that view alone accepts it (else the current value).
- * scores[voxel / score_stride][label] receives, for voxels that are multiples of score_stride,
- * the combined log score before the bias (h1: the sum of the views' log LCPDFs).
+ * scores[g / score_stride][label] receives, for voxels whose flat index g in the whole block is
+ * a multiple of score_stride, the combined log score before the bias (h1: the sum of the
+ * views' log LCPDFs).
  */
 __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, int X,
+                     int oz, int oy, int ox, int GZ, int GY, int GX,
                      __global const int *voxels, int n_voxels, int n_views,
                      __global const float *log_sums, int n_groups,
                      __global const float *group_values, __global const float *kern,
@@ -513,13 +530,14 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
         view_logf(log_sums + (size_t)(i * n_views + v) * NGV * VW, n_groups, kern, group_values,
                   labels, n_labels, k, fv[v]);
 
+    int z = voxel / (Y * X), rem = voxel - z * Y * X;
+    int y = rem / X, x = rem - y * X;
+    uint4 g = whole_coords(z, y, x, oz, oy, ox, GZ, GY, GX);
     uint u[4] = {0u, 0u, 0u, 0u};
     float x_s = vol[voxel];
     int cur = 0, prop = 0;
     if (relaxation) {
-        int z = voxel / (Y * X), rem = voxel - z * Y * X;
-        int y = rem / X, x = rem - y * X;
-        philox4x32_ctr_t c = {{(uint)x, (uint)y, (uint)z, tag}};
+        philox4x32_ctr_t c = {{g.x, g.y, g.z, tag}};
         philox4x32_key_t key = {{key0, key1}};
         philox4x32_ctr_t r = philox4x32(c, key);
         for (int j = 0; j < 4; ++j) u[j] = r.v[j];
@@ -530,7 +548,8 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
     }
     __global const floatv *bv = (__global const floatv *)bias;
     /* The balance needs each kept voxel's combined score without the bias (clsolid.ml.balance). */
-    __global float *keep = voxel % score_stride ? 0 : scores + (size_t)(voxel / score_stride) * n_labels;
+    long whole = ((long)g.z * GY + g.y) * GX + g.x;
+    __global float *keep = whole % score_stride ? 0 : scores + (size_t)(whole / score_stride) * n_labels;
 
     float value;
     if (heuristic <= 2) {
@@ -598,6 +617,20 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
     }
     vol[voxel] = value;
     temp[voxel] = t;
+}
+
+/* The state of voxels[0..n) of the buffers, packed to be read back (a tile gives back only the
+ * voxels it updated): values[i] = vol, values[n + i] = temp, sources[view * n + i] = src. */
+__kernel void pack_state(__global const float *vol, __global const float *temp, __global const int *src,
+                         int n_vox, int n_views, __global const int *voxels, int n,
+                         __global float *values, __global int *sources)
+{
+    int i = get_global_id(0);
+    if (i >= n) return;
+    int voxel = voxels[i];
+    values[i] = vol[voxel];
+    values[n + i] = temp[voxel];
+    for (int v = 0; v < n_views; ++v) sources[v * n + i] = src[v * n_vox + voxel];
 }
 
 /* The normalised per-label log LCPDF of each voxel-view (for tests and diagnostics):

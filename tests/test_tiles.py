@@ -1,0 +1,186 @@
+"""Tiles (issue 12, point 2): the tile geometry, and a tiled run that gives the one-piece run's
+volume voxel for voxel, with its memory checked per tile."""
+
+import numpy as np
+import pytest
+
+import clsolid
+from clsolid.cli import EXIT_USAGE, main
+from clsolid.core.tiles import Tiling, gather, split_axis
+from clsolid.errors import DeviceMemoryError, InputError
+from clsolid.exemplar import quantise
+from clsolid.ml import tiled
+from clsolid.ml.driver import run_ml
+from clsolid.ml.model import build_scale
+from clsolid.ml.opencl import CLBackend
+from clsolid.ml.params import MLParams
+from clsolid.ml.tiled import TiledBackend, check_tile, halo_width, largest_tile
+
+SHAPE = (20, 16, 18)  # no two axes alike; tiles of 8: 7, 7, 6 by 8, 8 by 6, 6, 6
+
+
+@pytest.fixture(scope="module")
+def labels(brick_labels):
+    """A 16x16 corner of the brick at 8 levels: runs at 20^3 take a second."""
+    return quantise(brick_labels[:16, :16], 8)
+
+
+# -- geometry ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("size, edge, lengths", [(20, 8, [7, 7, 6]), (16, 8, [8, 8]), (5, 8, [5]), (7, 1, [1] * 7)])
+def test_split_axis_is_even_and_covers_the_axis(size, edge, lengths):
+    cuts = split_axis(size, edge)
+    assert [n for _, n in cuts] == lengths
+    assert [s for s, _ in cuts] == list(np.cumsum([0] + lengths[:-1]))
+
+
+@pytest.mark.parametrize("shape, edge, halo", [((20, 18, 22), 8, 2), ((9, 16, 5), 4, 3), ((6, 6, 6), 6, 2),
+                                               ((12, 7, 10), 5, 4)])
+def test_tiles_gather_with_wrap_and_give_their_cores_back(shape, edge, halo):
+    a = np.random.default_rng(0).random((2,) + shape)  # a leading axis (views) comes along
+    tiling = Tiling(shape, edge, halo)
+    cover = np.zeros(shape, int)
+    out = np.zeros_like(a)
+    padded = np.pad(a, [(0, 0)] + [(halo, halo)] * 3, mode="wrap")
+    for tile in tiling.tiles:
+        cover[tile.core()] += 1
+        block = gather(a, tile)
+        assert block.shape == (2,) + tile.block_shape
+        for axis, (s, n, lead, b, size) in enumerate(zip(tile.start, tile.size, tile.lead, tile.block_shape, shape)):
+            if b == size:  # the whole axis, as the block has it: the tile's wrap is the block's
+                assert lead == s and tile.origin[axis] == 0
+            else:  # the core with a halo on both sides, wrapped round the block's edges
+                assert lead == halo and b == n + 2 * halo < size
+        whole = tuple(slice(None) if b == n else slice(s, s + b)
+                      for s, b, n in zip(tile.start, tile.block_shape, shape))
+        if all(b < n for b, n in zip(tile.block_shape, shape)):
+            np.testing.assert_array_equal(block, padded[(...,) + whole])
+        np.testing.assert_array_equal(block[(...,) + tile.inner()], a[(...,) + tile.core()])
+        out[(...,) + tile.core()] = block[(...,) + tile.inner()]
+        core = np.ravel_multi_index(np.indices(tile.size).reshape(3, -1) + np.array(tile.start)[:, None], shape)
+        np.testing.assert_array_equal(block[0].ravel()[tile.local(core)], a[0].ravel()[core])
+    assert (cover == 1).all()  # the cores partition the block
+    np.testing.assert_array_equal(out, a)
+    assert tiling.largest_block == tuple(max(t.block_shape[i] for t in tiling.tiles) for i in range(3))
+
+
+def test_group_finds_each_voxels_tile():
+    tiling = Tiling(SHAPE, 8, 2)
+    voxels = np.random.default_rng(1).choice(np.prod(SHAPE), 500, replace=False)
+    seen = []
+    for tile, part in tiling.group(voxels):
+        coords = np.unravel_index(part, SHAPE)
+        assert all(((c >= s) & (c < s + n)).all() for c, s, n in zip(coords, tile.start, tile.size))
+        seen.extend(part)
+    assert sorted(seen) == sorted(voxels)
+
+
+def test_halo_is_the_farthest_read(labels):
+    for k, views, half in ((5, 2, 2), (3, 3, 1), (9, 3, 4)):
+        model = build_scale(labels, SHAPE, MLParams(neighborhood=k, views=views, scales=1), 0)
+        assert halo_width(model) == half == np.abs(model.union_offsets).max()
+
+
+# -- a tiled run is the one-piece run ------------------------------------------------------------
+
+CASES = [  # each relaxation with 2 and 3 views, exact and pruned; balance on (the default)
+    dict(relaxation="icm", views=2, likelihood="exact", tile=8),
+    dict(relaxation="icm", views=3, likelihood="pruned", tile=10),  # the coarse scale in one tile
+    dict(relaxation="gibbs", views=2, likelihood="pruned", tile=8),
+    dict(relaxation="gibbs", views=3, likelihood="exact", tile=10),
+    dict(relaxation="annealing", views=2, likelihood="exact", tile=7),
+    dict(relaxation="annealing", views=3, likelihood="pruned", tile=8),
+]
+
+
+def _params(case):
+    return MLParams(neighborhood=5, scales=2, sweeps=2,
+                    **{k: v for k, v in case.items() if k != "tile"})
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda c: "-".join(str(v) for v in c.values()))
+def test_tiled_run_is_the_one_piece_run(device, labels, case):
+    params = _params(case)
+    whole = CLBackend(device)
+    tiles = TiledBackend(CLBackend(device), case["tile"])
+    a = run_ml(labels, SHAPE, params, 7, whole)[0]
+    b = run_ml(labels, SHAPE, params, 7, tiles)[0]
+    assert len(tiles.tiling.tiles) > 1
+    np.testing.assert_array_equal(a, b)
+    assert (whole.exact_visits, whole.pruned_visits) == (tiles.exact_visits, tiles.pruned_visits)
+
+
+def test_a_halo_too_narrow_changes_the_volume(device, labels, monkeypatch):
+    """The equality above is no accident of the tiles: one voxel less of halo and it is gone."""
+    params = _params(CASES[2])
+    a = run_ml(labels, SHAPE, params, 7, CLBackend(device))[0]
+    narrow = halo_width
+    monkeypatch.setattr(tiled, "halo_width", lambda model: narrow(model) - 1)
+    b = run_ml(labels, SHAPE, params, 7, TiledBackend(CLBackend(device), 8))[0]
+    assert (a != b).mean() > 0.05
+
+
+def test_random_start_in_runs_is_the_same(device, monkeypatch):
+    pixels = np.arange(40.0).reshape(5, 8)
+    whole = CLBackend(device).init_volume(SHAPE, 3, pixels)
+    monkeypatch.setattr(type(device), "max_alloc", property(lambda self: 1000))  # 250 voxels a run
+    np.testing.assert_array_equal(CLBackend(device).init_volume(SHAPE, 3, pixels), whole)
+
+
+# -- memory, options, CLI, checkpoints ----------------------------------------------------------
+
+
+def test_memory_is_checked_per_tile(device, monkeypatch):
+    """One piece does not fit a 1 MiB buffer limit: the error names the largest tile that does."""
+    binary = (np.random.default_rng(2).random((16, 16)) > 0.5).astype(np.uint8)
+    monkeypatch.setattr(type(device), "max_alloc", property(lambda self: 1 << 20))
+    kw = dict(neighborhood=5, scales=2, rng=1, device=device, levels=2)
+    with pytest.raises(DeviceMemoryError, match=r"tile=(\d+) \(--tile \1\) is the largest that fits") as info:
+        clsolid.synthesize(binary, (64, 64, 64), **kw)
+    edge = int(str(info.value).split("tile=")[1].split(" ")[0])
+    params = MLParams(neighborhood=5, scales=2, levels=2)
+    models = [build_scale(binary, (64, 64, 64), params, level) for level in (1, 0)]
+    engine = CLBackend(device)
+    assert largest_tile(engine, models) == edge
+    check_tile(engine, models, edge)  # fits
+    with pytest.raises(DeviceMemoryError, match=f"tile={edge + 1} the device holds"):
+        check_tile(engine, models, edge + 1)
+    with pytest.raises(DeviceMemoryError, match="with tile=64 the device holds .* use a smaller tile"):
+        clsolid.synthesize(binary, (64, 64, 64), tile=64, **kw)
+
+
+def test_tile_option_is_checked(device):
+    with pytest.raises(InputError, match="tile=0 must be a positive integer"):
+        clsolid.synthesize("gravel", (8, 8, 8), tile=0, device=device)
+    with pytest.raises(InputError, match="tile=4 is for OpenCL devices"):
+        clsolid.synthesize("gravel", (8, 8, 8), tile=4, device="reference")
+
+
+def test_cli_tile_flag(tmp_path, device):
+    args = ["--shape", "12", "10", "14", "--neighborhood", "5", "--scales", "2", "--seed", "4", "--builtin-size",
+            "16", "--max-sweeps", "3", "-q"]
+    assert main(["synth", "gravel", "-o", str(tmp_path / "a.npy"), *args]) == 0
+    assert main(["synth", "gravel", "-o", str(tmp_path / "b.npy"), *args, "--tile", "5"]) == 0
+    np.testing.assert_array_equal(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
+    assert main(["synth", "gravel", "-o", str(tmp_path / "c.npy"), *args, "--tile", "0"]) == EXIT_USAGE
+    assert main(["synth", "gravel", "-o", str(tmp_path / "d.npy"), "--method", "wl", "--tile", "5", "-q"]) == EXIT_USAGE
+
+
+def test_tiled_checkpoint_resumes_identically(tmp_path, device):
+    """A tiled run's checkpoint holds the whole arrays: it resumes, tiled, to the one-piece volume."""
+    kw = dict(neighborhood=5, scales=2, rng=4, builtin_size=16, sweeps=3, likelihood="pruned", device=device)
+    whole = clsolid.synthesize("gravel", (12, 10, 14), **kw)
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def stop(info):
+        seen.append(info.sweep)
+        if len(seen) == 4:  # the second sweep of the finest scale
+            raise Stop
+
+    with pytest.raises(Stop):
+        clsolid.synthesize("gravel", (12, 10, 14), tile=5, checkpoint=tmp_path, progress=stop, **kw)
+    np.testing.assert_array_equal(clsolid.resume(tmp_path, device=device, tile=6), whole)
