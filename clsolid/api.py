@@ -18,7 +18,7 @@ METHODS = ("ml", "wl", "kopf", "chen-wang")
 OUTPUTS = ("values", "labels")
 #: Options of the search methods (clsolid.search.params.SearchParams).
 _SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order", "causal", "histogram", "candidates",
-                   "specify", "search")
+                   "specify", "search", "balance")
 #: Options of the search methods that are not parameters of the method (what to report).
 _SEARCH_REPORTS = ("site_map",)
 #: The neighbourhood side each method uses when none is given (ML: the thesis case; WL: ch5_np_common).
@@ -132,7 +132,10 @@ def synthesize(
         full square; default False), for ``kopf`` ``histogram`` (``"global"``, default, or
         ``"slice"``: the re-weighting against the histogram of the voxel's slice), for ``wl``
         and ``kopf`` ``specify`` (after every pass, the block's grey levels mapped rank for
-        rank onto the exemplar's histogram; default True for ``kopf``, False for ``wl``), ``search``
+        rank onto the exemplar's histogram; default True for ``kopf``, False for ``wl``), for
+        ``kopf`` ``balance`` (categorical exemplars: each set's vote biased toward the
+        exemplar's phase fractions, as the likelihood method's balance; default 1, 0 = the
+        thesis), ``search``
         (``"exact"``, default: every exemplar site; ``"coherence"``: the k-coherence
         candidates of the voxel's neighbours' matches, several times faster), and
         ``site_map=True`` (with ``full_output``) adds the position

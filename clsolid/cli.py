@@ -136,8 +136,9 @@ def _add_synth(sub) -> None:
     p.add_argument("--sweeps", type=int, default=d.sweeps,
                    help="exactly this many sweeps per scale (default: stop on the temperature rule)")
     p.add_argument("--balance", type=float, default=d.balance,
-                   help="label-histogram balance in [0, 1]: each sweep aims that far from the unbiased "
-                        "fractions towards the exemplar's (default %(default)s = exactly; 0 = off, the thesis)")
+                   help="label-histogram balance in [0, 1] (ml, and kopf's phases): each sweep (kopf: each set's "
+                        "vote) aims that far from the unbiased fractions towards the exemplar's (default "
+                        "%(default)s = exactly; 0 = off, the thesis)")
     p.add_argument("--likelihood", choices=LIKELIHOODS, default=d.likelihood,
                    help="the Parzen sum over every exemplar site (exact, the thesis) or over k-coherence "
                         "candidates plus a sample of the other sites (pruned); auto (default): pruned for "
@@ -302,7 +303,8 @@ def _check_resume_flags(args) -> None:
 
 def _check_method_flags(args) -> None:
     """Refuse a flag the chosen method would not read (set away from its default)."""
-    flags = _given(args, _WL_ONLY if args.method == "ml" else _ML_ONLY)
+    # kopf balances its phases too; the search parameters say which method has no balance
+    flags = _given(args, _WL_ONLY if args.method == "ml" else tuple(n for n in _ML_ONLY if n != "balance"))
     if flags:
         raise InputError(f"{flags} not used by --method {args.method}")
 
@@ -353,6 +355,8 @@ def cmd_synth(args) -> int:
                        init=args.init, rule=args.rule, order=args.order, causal=args.causal,
                        histogram=args.histogram, candidates=args.candidates, search=args.search,
                        specify=args.specify, builtin_size=args.builtin_size)
+        if args.method == "kopf" or args.balance != SYNTH_DEFAULTS["balance"]:
+            options["balance"] = args.balance
         if args.site_map is not None:
             if args.site_map.suffix.lower() != ".png":
                 raise InputError(f"--site-map {args.site_map} must end in .png")

@@ -280,3 +280,43 @@ def test_specify_is_checked(kw):
 
 def test_specify_defaults_on_for_kopf_only():
     assert [SearchParams(method=m).specify for m in ("wl", "kopf", "chen-wang")] == [False, True, False]
+
+
+def test_balanced_set_vote_moves_the_disputed_voxels_toward_the_exemplars_fractions():
+    from types import SimpleNamespace
+
+    from clsolid.search.kopf import balanced_set_vote
+
+    ex = np.array([[0.0, 255.0], [0.0, 255.0]])  # 50/50
+    block = np.zeros((1, 2, 4))  # 8 voxels, all phase 0
+    hist = LevelHistogram(ex, ex, block)
+    level = SimpleNamespace(histogram=hist, params=SimpleNamespace(balance=1.0))
+    # a set of 4 voxels: the first view says 0 (weight 2), the second 255 (weight 1)
+    values = np.array([[0.0] * 4, [255.0] * 4])
+    weights = np.array([[2.0] * 4, [1.0] * 4])
+    assert vote(values, weights).tolist() == [0.0] * 4  # the plain vote keeps the majority
+    new = balanced_set_vote(level, values, weights, np.zeros(4))
+    assert np.sum(new == 255.0) == 4  # the other 4 voxels are 0: these must all be 255 for 50/50
+    level.params.balance = 0.0  # off: the bias has no target to move toward but the unbiased one
+    assert np.sum(balanced_set_vote(level, values, weights, np.zeros(4)) == 255.0) < 4
+    # a phase no view proposes is never chosen
+    assert set(balanced_set_vote(level, np.zeros((2, 4)), weights, np.zeros(4))) == {0.0}
+
+
+def test_balance_keeps_kopfs_phase_fractions(device):
+    ex = gallery_exemplar("composite3", 64)
+    want = np.array([np.mean(ex == v) for v in (0, 128, 255)])
+    err = {}
+    for balance in (0.0, 1.0):
+        vol = clsolid.synthesize(ex, (24, 24, 24), method="kopf", iterations=3, balance=balance, rng=1,
+                                 device=device)
+        err[balance] = np.abs(np.array([np.mean(vol == v) for v in (0, 128, 255)]) - want).max()
+    assert err[1.0] < 0.02 and err[1.0] < err[0.0] / 2, err  # issue 11: within 2 points
+
+
+@pytest.mark.parametrize("kw", [dict(method="wl", balance=1.0), dict(method="kopf", balance=1.5),
+                                dict(method="kopf", balance=True)])
+def test_balance_is_checked(kw):
+    with pytest.raises(clsolid.InputError, match="balance"):
+        SearchParams(**kw)
+    assert SearchParams(method="kopf").balance == 1.0 and SearchParams(method="wl").balance == 0.0

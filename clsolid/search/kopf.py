@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.views import VIEW_AXES
-from ..ml.balance import project_bias
+from ..ml.balance import project_bias, sweep_target
 from .level import Level
 from .match import square_offsets
 from .wl import matches
@@ -81,13 +81,32 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
     w = robust_weights(ssd, level.span) * factor
     flat = vol.reshape(-1)
     old = flat[voxels].copy()
-    if hist.values.size <= MAX_PHASES:
+    if hist.values.size <= MAX_PHASES and level.params.balance and level.values.size <= MAX_PHASES:
+        new = balanced_set_vote(level, values, w, old)
+    elif hist.values.size <= MAX_PHASES:
         new = vote(values, w)
     else:
         new = (w * values).sum(axis=0) / w.sum(axis=0)
     flat[voxels] = new
     hist.replace(old, new, voxels)
     return sites.size
+
+
+def balanced_set_vote(level: Level, values: np.ndarray, weights: np.ndarray, old: np.ndarray) -> np.ndarray:
+    """The weighted vote of one conflict-free set, biased toward the exemplar's phase fractions.
+
+    The set's voxels aim at the fractions that bring the whole block (the other voxels as they
+    are, *old* the set's current values) to the exemplar's, ``balance`` of the way
+    (:func:`clsolid.ml.balance.sweep_target`); :func:`vote_balanced` meets them where the
+    views' matches disagree. A phase no view proposes for a voxel stays out of its vote.
+    """
+    hist = level.histogram
+    phases = hist.values
+    support = np.stack([(weights * (values == p)).sum(axis=0) for p in phases])
+    fixed = hist.counts - np.bincount(hist.bin(old), minlength=phases.size)
+    unbiased = support / np.maximum(support.sum(axis=0), np.finfo(np.float64).tiny)
+    target = sweep_target(hist.exemplar, fixed, old.size, unbiased.mean(axis=1), level.params.balance)
+    return phases[vote_balanced(support, target)]
 
 
 def vote(values: np.ndarray, weights: np.ndarray) -> np.ndarray:

@@ -98,6 +98,13 @@ class SearchParams:
         for ``kopf``, whose re-weighting exists to keep the histogram and alone does not
         (README, Choices), False for ``wl`` (the published form) and ``chen-wang`` (it
         copies exemplar pixels).
+    balance : float or None
+        ``kopf`` only, categorical exemplars: the weighted vote of every conflict-free set
+        is biased so that the block's phase fractions move ``balance`` of the way to the
+        exemplar's (1: exactly; 0: off, the thesis), the likelihood method's label-histogram
+        balance (``clsolid.ml.balance``) applied to the views' votes
+        (:func:`clsolid.search.kopf.balanced_set_vote`). None (default): 1 for ``kopf``, 0
+        for the others. Kopf's overlap rule balances its vote always.
     candidates : int
         ``chen-wang`` only: the size of each exemplar site's candidate set, the site itself
         included (the thesis's k; tested with 1, 5, 15, 25; default 15).
@@ -118,6 +125,7 @@ class SearchParams:
     candidates: int = DEFAULT_CANDIDATES
     search: str = "exact"
     specify: bool | None = None
+    balance: float | None = None
 
     def __post_init__(self) -> None:
         one_of("method", self.method, METHODS)
@@ -153,6 +161,16 @@ class SearchParams:
             raise InputError(f"specify={self.specify!r} must be True, False or None (True for kopf)")
         if self.specify and self.method == "chen-wang":
             raise InputError("specify=True maps blended grey levels; chen-wang copies exemplar pixels, it has none")
+        if self.balance is None:
+            object.__setattr__(self, "balance", 1.0 if self.method == "kopf" else 0.0)
+        if not (isinstance(self.balance, (int, float)) and not isinstance(self.balance, bool)
+                and 0 <= self.balance <= 1):
+            raise InputError(f"balance={self.balance!r} must be a number in [0, 1] (0 = off, 1 = the exemplar's "
+                             "phase fractions exactly)")
+        if self.balance and self.method != "kopf":
+            raise InputError(f"balance={self.balance!r} is kopf's (and the likelihood method's); method "
+                             f"{self.method!r} has none")
+        object.__setattr__(self, "balance", float(self.balance))
         if not isinstance(self.parent, bool):
             raise InputError(f"parent={self.parent!r} must be True or False")
 
