@@ -122,3 +122,14 @@ def test_cli_workers_flag(tmp_path, device):
     assert main(["synth", "gravel", "-o", str(tmp_path / "d.npy"), *args, "--tile", "5", "--workers", "2",
                  "--scheduler", "tcp://127.0.0.1:1"]) == EXIT_USAGE
 
+
+@pytest.mark.slow  # three runs of a 64² exemplar; the tool's table is what tests/test_tools.py checks
+def test_bench_scale_compares_the_workers_run(capsys, device, client, tool):
+    import argparse
+
+    args = argparse.Namespace(cases=["64:8"], names=["porous50"], likelihoods=["pruned"], budget=900.0,
+                              device=device_spec(device), tile=5, workers=2)
+    tool("bench_scale").table(args, client)
+    out = capsys.readouterr().out
+    assert "the tiles on 2 Dask workers" in out and "| porous50 | 64² → 8³ | pruned |" in out
+    assert out.count("| yes |") == 2  # tiled is one piece, and the workers' run is the tiled one
