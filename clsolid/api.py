@@ -28,7 +28,7 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "prune_similar",
                "prune_sample", "prune_min_weight")
-_BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile")
+_BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
 _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
 
@@ -53,18 +53,29 @@ def _load(exemplar, levels, rng, options: dict):
 
 def make_backend(device, backend_options: dict):
     """The reference back end for ``device="reference"``, else an OpenCL one, tiled if
-    *backend_options* give a ``tile`` (see :mod:`clsolid.ml.tiled`)."""
+    *backend_options* give a ``tile`` (see :mod:`clsolid.ml.tiled`), its tiles run on the
+    workers of a Dask ``client`` if they give one (see :mod:`clsolid.ml.distributed`)."""
     options = dict(backend_options)
-    tile = options.pop("tile", None)
+    tile, client = options.pop("tile", None), options.pop("client", None)
     if is_reference(device):
-        if tile is not None:
-            raise InputError(f"tile={tile!r} is for OpenCL devices: the reference back end holds the whole "
-                             "volume on the host; drop tile")
+        for name, value in (("tile", tile), ("client", client)):
+            if value is not None:
+                raise InputError(f"{name}={value!r} is for OpenCL devices: the reference back end holds the whole "
+                                 f"volume on the host; drop {name}")
         from .ml.reference import ReferenceBackend
 
         return ReferenceBackend()
+    from .ml.tiled import TiledBackend, check_edge
+
+    if client is not None:
+        if tile is None:
+            raise InputError("client= runs the tiles of every conflict-free set on Dask workers: give tile=N too "
+                             "(--tile N), tiles large enough that their compute outweighs shipping them")
+        from .ml.distributed import DaskTiles
+
+        check_edge(tile)  # before asking the workers anything
+        return TiledBackend(DaskTiles(client, device, **options), tile)
     from .ml.opencl import CLBackend
-    from .ml.tiled import TiledBackend
     from .core.device import select_device
 
     engine = CLBackend(select_device(device), **options)
@@ -213,7 +224,12 @@ def synthesize(
         block's (``clsolid.ml.tiled``). The volume is the one-piece run's, voxel for voxel; it
         costs moving each tile between host and device for every conflict-free set. A block
         whose buffers do not fit the device in one piece is refused with a
-        ``DeviceMemoryError`` that names the largest tile that fits.
+        ``DeviceMemoryError`` that names the largest tile that fits. ``client`` (a
+        ``dask.distributed.Client``; needs ``tile``) runs the tiles of every conflict-free set at
+        once as tasks on its workers, each opening ``device`` (a spec string; None: each
+        worker's best) for itself (``clsolid.ml.distributed``; ``pip install "clsolid[dask]"``).
+        The volume is again the one-piece run's; every set ships each tile's state to a worker
+        and back, so it pays for tiles large enough that compute dominates.
 
         Relaxation (thesis_spec §2.3): ``relaxation`` is ``"gibbs"`` (default: each visited
         voxel draws its label from the combined, normalised LCPDF; per-voxel temperatures,
@@ -312,7 +328,7 @@ def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_outp
 
 def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | None = None,
            output: str = "values", full_output: bool = False, checkpoint_every: float = 0.0,
-           tile: int | None = None):
+           tile: int | None = None, client=None):
     """Go on with a likelihood synthesis from its checkpoint folder, and keep checkpointing there.
 
     Parameters
@@ -327,6 +343,8 @@ def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | N
     tile : int, optional
         Go on in tiles of at most this many voxels on a side (as :func:`synthesize`'s
         ``tile``), whether or not the run began in tiles: the volume is the same.
+    client : distributed.Client, optional
+        Run those tiles on its Dask workers (as :func:`synthesize`'s ``client``).
 
     Returns
     -------
@@ -354,7 +372,7 @@ def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | N
     if expected is None or state.volume.size != int(np.prod(expected)):
         raise CheckpointError(f"{checkpoint}: the saved volume ({state.volume.size} voxels) does not fit scale "
                               f"{state.scale + 1} of a {shape} run: the checkpoint is corrupt")
-    backend = make_backend(device, {} if tile is None else {"tile": tile})
+    backend = make_backend(device, {k: v for k, v in (("tile", tile), ("client", client)) if v is not None})
     if backend.name != meta.get("device"):
         log.warning("resuming on %s a run begun on %s: the volume will differ from the uninterrupted one",
                     backend.name, meta.get("device"))

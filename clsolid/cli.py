@@ -7,6 +7,7 @@ memory, 5 kernel build failure, 1 anything unexpected (traceback with ``--debug`
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import platform
@@ -159,6 +160,11 @@ def _add_synth(sub) -> None:
                    help="ml: synthesize the block in tiles of at most N voxels on a side, each with a halo, for "
                         "blocks larger than the device holds; the same volume as in one piece, more slowly "
                         "(default: one piece)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="ml, with --tile: run the tiles of every set on the workers of the Dask scheduler at ADDRESS "
+                        "(each worker uses its own OpenCL device, --device naming it); needs clsolid[dask]")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="ml, with --tile: as --scheduler, on N local worker processes started for this run")
     p.add_argument("--resume", type=Path, default=None,
                    help="go on with the run saved in this checkpoint folder (its exemplar, shape, settings and "
                         "seed; give only -o and output options) and keep checkpointing there")
@@ -277,7 +283,7 @@ def _tracker(levels: int, records: list):
 _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited",
             "insert_slices", "insert_spacing", "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "prune_similar",
-            "prune_sample", "prune_min_weight", "tile", "indices", "track")
+            "prune_sample", "prune_min_weight", "tile", "scheduler", "workers", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram", "candidates",
             "specify", "search", "site_map", "source_map")
 
@@ -285,7 +291,7 @@ _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal
 #: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
 _RESUME_FIXED = ("exemplar", "shape", "method", "preset", "heuristic", "neighborhood", "scales", "views", "levels",
                  "seed", "builtin_size", "checkpoint", "track") + _WL_ONLY + tuple(
-                     n for n in _ML_ONLY if n not in ("indices", "track", "tile"))
+                     n for n in _ML_ONLY if n not in ("indices", "track", "tile", "scheduler", "workers"))
 
 
 def _given(args, names) -> str:
@@ -327,6 +333,20 @@ def _ml_options(args) -> dict:
         if values is not None:
             options[name] = values[0] if len(values) == 1 else tuple(values)
     return options
+
+
+def _dask_client(args):
+    """The Dask client of ``--scheduler`` or ``--workers`` (a context manager), or none."""
+    if args.scheduler is None and args.workers is None:
+        return contextlib.nullcontext()
+    if args.scheduler is not None and args.workers is not None:
+        raise InputError(f"--scheduler {args.scheduler} and --workers {args.workers}: give one (a running Dask "
+                         "scheduler, or local worker processes for this run)")
+    if args.tile is None:
+        raise InputError("--scheduler and --workers run the tiles of every set on Dask workers: give --tile N too")
+    from .ml.distributed import dask_client
+
+    return dask_client(args.scheduler, args.workers)
 
 
 def cmd_synth(args) -> int:
@@ -375,16 +395,19 @@ def cmd_synth(args) -> int:
         hooks.append(_tracker(256 if args.levels is None else args.levels, records))
     heuristic = args.heuristic if args.method == "ml" else None
     report = (lambda info: [h(info) for h in hooks]) if hooks else None
-    if args.resume is not None:
-        result = resume(args.resume, device=args.device, progress=report, full_output=True,
-                        checkpoint_every=args.checkpoint_every, tile=args.tile)
-    else:
-        if args.checkpoint is not None:
-            options.update(checkpoint=args.checkpoint, checkpoint_every=args.checkpoint_every)
-        result = synthesize(args.exemplar, tuple(args.shape), method=args.method, heuristic=heuristic,
-                            neighborhood=args.neighborhood, scales=args.scales, views=args.views,
-                            levels=args.levels, rng=args.seed, device=args.device, progress=report,
-                            full_output=True, **options)
+    with _dask_client(args) as client:
+        if args.resume is not None:
+            result = resume(args.resume, device=args.device, progress=report, full_output=True,
+                            checkpoint_every=args.checkpoint_every, tile=args.tile, client=client)
+        else:
+            if args.checkpoint is not None:
+                options.update(checkpoint=args.checkpoint, checkpoint_every=args.checkpoint_every)
+            if client is not None:
+                options["client"] = client
+            result = synthesize(args.exemplar, tuple(args.shape), method=args.method, heuristic=heuristic,
+                                neighborhood=args.neighborhood, scales=args.scales, views=args.views,
+                                levels=args.levels, rng=args.seed, device=args.device, progress=report,
+                                full_output=True, **options)
     written_kind = "indices" if args.indices else "values"
     written = save_volume(args.output, result.labels if args.indices else result.volume,
                           voxel_size=voxel_size, unit=args.unit,

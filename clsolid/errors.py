@@ -27,10 +27,14 @@ class DeviceMemoryError(ClsolidError, MemoryError):
     def __init__(self, buffer: str, nbytes: int, limit: int, what: str = "max_mem_alloc_size",
                  advice: str | None = None):
         self.buffer, self.nbytes, self.limit, self.what = buffer, int(nbytes), int(limit), what
+        self.advice = advice
         super().__init__(
             f"buffer '{buffer}' needs {nbytes / 2**20:.1f} MiB ({nbytes} bytes) but the device's "
             f"{what} is {limit / 2**20:.1f} MiB ({limit} bytes); {advice or self.ADVICE}"
         )
+
+    def __reduce__(self):  # rebuilt from its fields where it crosses processes (a Dask worker's)
+        return type(self), (self.buffer, self.nbytes, self.limit, self.what, self.advice)
 
     def advised(self, advice: str) -> "DeviceMemoryError":
         """The same error with other *advice*."""

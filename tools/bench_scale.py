@@ -8,17 +8,21 @@ exemplar). A run that passes ``--budget`` seconds is stopped there, and its figu
 those of the sweeps it finished (marked "stopped"). NumPy's float32 matmul rate, measured in
 the same run, is the machine's reference. Timings only: nothing here asserts on speed.
 With ``--tile N`` every case runs again in tiles of N (clsolid.ml.tiled), and the table adds
-its time and whether its volume is the one-piece run's (it must be). Not measured, because
-clsolid cannot do them yet: Dask workers.
+its time and whether its volume is the one-piece run's (it must be). With ``--workers N`` as
+well, every case runs a third time, its tiles on a Dask LocalCluster of N worker processes of
+one thread each (clsolid.ml.distributed; started once, before the first case, and not timed),
+and the table adds its time and whether its volume is the one-process tiled run's (it must be).
 
     python tools/bench_scale.py                                   # 64:64 and 128:128, both sums
     python tools/bench_scale.py --cases 256:256 --likelihoods pruned --budget 1800
     python tools/bench_scale.py --cases 50:64 --names porous50 --likelihoods pruned --tile 32
+    python tools/bench_scale.py --cases 50:64 --names porous50 --likelihoods pruned --tile 32 --workers 2
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import time
 
 import numpy as np
@@ -32,9 +36,10 @@ class _Stop(Exception):
     """Raised from the progress callback when a run passes its budget."""
 
 
-def run(image: np.ndarray, side: int, likelihood: str, budget: float, device, tile: int | None = None) -> dict:
-    """Grow a *side*^3 cube (in tiles of *tile*, if given); return the volume (None if stopped),
-    the time, sweeps and finest-scale cost per voxel visit."""
+def run(image: np.ndarray, side: int, likelihood: str, budget: float, device, tile: int | None = None,
+        client=None) -> dict:
+    """Grow a *side*^3 cube (in tiles of *tile*, if given, on the workers of a Dask *client*, if
+    given); return the volume (None if stopped), the time, sweeps and finest-scale cost per voxel visit."""
     sweeps: list = []
     t0 = time.perf_counter()
 
@@ -46,7 +51,7 @@ def run(image: np.ndarray, side: int, likelihood: str, budget: float, device, ti
             raise _Stop
 
     stopped, volume = False, None
-    options = {} if tile is None else {"tile": tile}
+    options = {k: v for k, v in (("tile", tile), ("client", client)) if v is not None}
     try:
         volume = clsolid.synthesize(image, (side,) * 3, rng=1, device=device, likelihood=likelihood,
                                     progress=progress, **options)
@@ -69,12 +74,35 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--device", default=None)
     ap.add_argument("--tile", type=int, default=None, metavar="N",
                     help="also run every case in tiles of N voxels a side, and compare the volumes")
+    ap.add_argument("--workers", type=int, default=None, metavar="N",
+                    help="with --tile: also run every case's tiles on a Dask LocalCluster of N worker processes")
     args = ap.parse_args(argv)
+    if args.workers is not None and args.tile is None:
+        ap.error("--workers needs --tile")
+    with contextlib.ExitStack() as stack:
+        client = None
+        if args.workers is not None:
+            from clsolid.ml.distributed import dask_client
+
+            client = stack.enter_context(dask_client(workers=args.workers))
+        table(args, client)
+
+
+def same(a, b) -> str:
+    """Whether two runs' volumes are identical ("?" where one was stopped)."""
+    return "?" if a["volume"] is None or b["volume"] is None else ("yes" if np.array_equal(a["volume"], b["volume"])
+                                                                     else "NO")
+
+
+def table(args, client) -> None:
+    """Run every case (in tiles, on the *client*'s workers, as asked) and print the table."""
     device = clsolid.select_device(args.device)
     print(f"{device.name}; matmul reference {matmul_gflops():.1f} GFLOP/s (float32, NumPy, this run)")
     tiled = "" if args.tile is None else f" tiles of {args.tile}: time (s) | same volume |"
+    if client is not None:
+        tiled += f" the tiles on {args.workers} Dask workers: time (s) | same volume as tiled |"
     print(f"| exemplar | case | likelihood | time (s) | sweeps (finest) | finest scale, us per voxel visit |{tiled}")
-    print("|---|---|---|---|---|---|" + ("---|---|" if tiled else ""))
+    print("|---|---|---|---|---|---|" + "---|---|" * tiled.count("time (s)"))
     for case in args.cases:
         ex_side, cube = (int(v) for v in case.split(":"))
         for name in args.names:
@@ -86,9 +114,10 @@ def main(argv: list[str] | None = None) -> None:
                        f"{r['sweeps']} ({r['finest_sweeps']}) | {r['per_visit_us']:.1f} |")
                 if args.tile is not None:
                     t = run(image, cube, likelihood, args.budget, device, args.tile)
-                    same = "?" if r["volume"] is None or t["volume"] is None else (
-                        "yes" if np.array_equal(r["volume"], t["volume"]) else "NO")
-                    row += f" {t['seconds']:.1f}{' (stopped)' if t['stopped'] else ''} | {same} |"
+                    row += f" {t['seconds']:.1f}{' (stopped)' if t['stopped'] else ''} | {same(r, t)} |"
+                    if client is not None:
+                        w = run(image, cube, likelihood, args.budget, device, args.tile, client)
+                        row += f" {w['seconds']:.1f}{' (stopped)' if w['stopped'] else ''} | {same(t, w)} |"
                 print(row, flush=True)
 
 

@@ -147,6 +147,16 @@ def list_devices(*, probe_devices: bool = True) -> list[dict]:
     return out
 
 
+def device_index(device: Device) -> str:
+    """The ``"platform:device"`` index of *device* among this machine's OpenCL devices: a spec
+    that another process on this machine (a Dask worker) opens as the same device."""
+    for ip, platform in enumerate(_platforms()):
+        for idev, dev in enumerate(_devices_of(platform)):
+            if dev == device.device:
+                return f"{ip}:{idev}"
+    raise NoDeviceError(f"{device.name} is not among this machine's OpenCL devices; give a device spec instead")
+
+
 def _pick(items: list, token: str, what: str, label) -> Any:
     """Pick an item by index or by case-insensitive substring of its label."""
     token = token.strip()

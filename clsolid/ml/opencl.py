@@ -398,6 +398,20 @@ class CLBackend:
         cl.enqueue_copy(self.device.queue, self._scores, self.scores_buf)
         return self._scores
 
+    def read_scores(self, rows: np.ndarray) -> np.ndarray:
+        """Some *rows* of :meth:`scores` (what a tile gives back of the voxels it updated):
+        copies only the span of rows between the first and the last."""
+        import pyopencl as cl
+
+        rows = np.asarray(rows, np.int64)
+        n_labels = self.model.labels.size
+        if rows.size == 0:
+            return np.empty((0, n_labels), np.float32)
+        first = int(rows.min())
+        span = np.empty((int(rows.max()) + 1 - first, n_labels), np.float32)
+        cl.enqueue_copy(self.device.queue, span, self.scores_buf, src_offset=first * n_labels * _F4)
+        return span[rows - first]
+
     def _diagnostic_sums(self, voxels: np.ndarray) -> tuple[int, np.ndarray]:
         """Run the Parzen sums on distinct *voxels*; return the item count and, for each of
         *voxels*, its row in the (possibly reordered) batch. Sources are updated as in a visit."""

@@ -18,16 +18,23 @@ run's, bit for bit:
 
 The price is moving each tile's state between host and device for every set (``tools/bench_scale.py
 --tile``). Only the OpenCL back end is tiled; the float64 reference holds everything on the host.
+
+Who runs a set's tiles is a *runner*: :class:`LocalTiles` runs them one after another on one
+engine in this process; :class:`clsolid.ml.distributed.DaskTiles` runs them at once as tasks on
+Dask workers, each with its own engine. Both run :func:`run_tile` on a :class:`TileJob`, and the
+host keeps the balance's score rows the tiles give back, so the volume is the same.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Iterable, Iterator
 
 import numpy as np
 
 from ..core.tiles import Tiling, gather
 from ..errors import DeviceMemoryError, InputError
+from .balance import n_score_slots, score_stride
 from .model import ScaleModel
 from .params import MLParams
 from .pruned import COHERENCE_REACH
@@ -79,65 +86,138 @@ def largest_tile(engine: Any, models: list[ScaleModel]) -> int | None:
     return lo
 
 
+def check_edge(tile) -> int:
+    """*tile* as an int; refuse (:class:`~clsolid.errors.InputError`) anything but a positive integer."""
+    if isinstance(tile, bool) or not isinstance(tile, (int, np.integer)) or tile < 1:
+        raise InputError(f"tile={tile!r} must be a positive integer (voxels on a side of a tile)")
+    return int(tile)
+
+
+@dataclass
+class TileJob:
+    """What a tile needs to relax its voxels of one set: its state, halo included (gathered
+    by :func:`clsolid.core.tiles.gather`), where it lies, the voxels (the tile's flat
+    indices) and the balance's score rows of those voxels that have one."""
+
+    volume: np.ndarray
+    temperature: np.ndarray
+    sources: np.ndarray
+    origin: tuple[int, int, int]
+    voxels: np.ndarray
+    score_rows: np.ndarray
+
+
+@dataclass
+class TileResult:
+    """What a tile gives back: its voxels' values, temperatures and sources ``(views, m)``,
+    the rows of scores asked for, and the visits it made with each sum ``(exact, pruned)``."""
+
+    values: np.ndarray
+    temperatures: np.ndarray
+    sources: np.ndarray
+    scores: np.ndarray
+    visits: tuple[int, int]
+
+
+def run_tile(engine: Any, job: TileJob) -> TileResult:
+    """Relax a tile's voxels of a set on *engine* (a :class:`~clsolid.ml.opencl.CLBackend`
+    holding the scale's tables and the sweep's arguments)."""
+    before = engine.exact_visits, engine.pruned_visits
+    engine.load_state(job.volume, job.temperature, job.sources, job.origin)
+    engine.update(job.voxels)
+    values, temperatures, sources = engine.read_voxels(job.voxels)
+    return TileResult(values, temperatures, sources, engine.read_scores(job.score_rows),
+                      (engine.exact_visits - before[0], engine.pruned_visits - before[1]))
+
+
+class LocalTiles:
+    """Runs a set's tiles one after another on one engine in this process.
+
+    A runner of :class:`TiledBackend` (see :class:`clsolid.ml.distributed.DaskTiles` for the
+    other): ``prepare``, ``init_volume``, ``load_scale``, ``start_sweep`` and ``map``.
+    """
+
+    def __init__(self, engine: Any) -> None:
+        self.engine, self.name = engine, engine.name
+
+    def prepare(self, models: list[ScaleModel], edge: int) -> None:
+        check_tile(self.engine, models, edge)
+
+    def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
+        return self.engine.init_volume(shape, seed, pixels)
+
+    def load_scale(self, model: ScaleModel, params: MLParams, block) -> None:
+        self.engine.load_scale(model, params, block)
+
+    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
+        self.engine.start_sweep(seed, tag, t_in, bias)
+
+    def map(self, jobs: Iterable[TileJob]) -> Iterator[TileResult]:
+        """The jobs' results in their order, each run when asked for (one tile's state at a time)."""
+        return (run_tile(self.engine, job) for job in jobs)
+
+
 class TiledBackend:
     """Runs :func:`clsolid.ml.driver.run_ml` a tile at a time; the same interface as
     :class:`clsolid.ml.opencl.CLBackend`, and the same volume.
 
     Parameters
     ----------
-    engine : CLBackend
-        Holds a scale's tables and one tile's state on its device.
+    runner : CLBackend or runner
+        An engine (run in this process by :class:`LocalTiles`), or a runner of the tiles,
+        such as :class:`clsolid.ml.distributed.DaskTiles`.
     tile : int
         Most voxels on a side of a tile's core; each tile takes a halo of the
         neighbourhood's half-width on top (:func:`halo_width`).
     """
 
-    def __init__(self, engine: Any, tile: int) -> None:
-        if isinstance(tile, bool) or not isinstance(tile, (int, np.integer)) or tile < 1:
-            raise InputError(f"tile={tile!r} must be a positive integer (voxels on a side of a tile)")
-        self.engine, self.tile = engine, int(tile)
-        self.name = engine.name
-
-    @property
-    def exact_visits(self) -> int:
-        return self.engine.exact_visits
-
-    @property
-    def pruned_visits(self) -> int:
-        return self.engine.pruned_visits
+    def __init__(self, runner: Any, tile: int) -> None:
+        self.tile = check_edge(tile)
+        self.runner = runner if hasattr(runner, "map") else LocalTiles(runner)
+        self.name = self.runner.name
+        self.exact_visits = self.pruned_visits = 0  # voxel visits by sum, in the pruned mode
 
     def prepare(self, models: list[ScaleModel]) -> None:
         """Refuse, before allocating anything, tiles whose buffers exceed the device limits."""
-        check_tile(self.engine, models, self.tile)
+        self.runner.prepare(models, self.tile)
 
     def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
         """The random start (see :meth:`clsolid.ml.opencl.CLBackend.init_volume`)."""
-        return self.engine.init_volume(shape, seed, pixels)
+        return self.runner.init_volume(shape, seed, pixels)
 
     def start_scale(self, model: ScaleModel, vol: np.ndarray, temp: np.ndarray, params: MLParams,
                     sources: np.ndarray | None = None) -> None:
         """Upload a scale's tables, and keep its state on the host; *sources* as for
         :meth:`clsolid.ml.opencl.CLBackend.start_scale`."""
         self.tiling = scale_tiling(model, self.tile)
-        self.engine.load_scale(model, params, self.tiling.largest_block)
+        self.runner.load_scale(model, params, self.tiling.largest_block)
         views = model.offsets.shape[0]
         self._vol = np.array(vol, np.float32)
         self._temp = np.array(temp, np.float32)
         self._src = (np.full((views,) + model.shape, -1, np.int32) if sources is None
                      else np.array(sources, np.int32).reshape((views,) + model.shape))
+        self.stride = score_stride(model.shape)
+        self._scores = np.zeros((n_score_slots(model.shape), model.labels.size), np.float32)
 
     def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
         """As :meth:`clsolid.ml.opencl.CLBackend.start_sweep`."""
-        self.engine.start_sweep(seed, tag, t_in, bias)
+        self.runner.start_sweep(seed, tag, t_in, bias)
 
     def update(self, voxels: np.ndarray) -> None:
         """Relax one conflict-free set of voxels (flat indices), tile by tile."""
-        e, src = self.engine, self.sources()
-        for tile, part in self.tiling.group(voxels):
-            e.load_state(gather(self._vol, tile), gather(self._temp, tile), gather(self._src, tile), tile.origin)
-            local = tile.local(part)
-            e.update(local)
-            self._vol.flat[part], self._temp.flat[part], src[:, part] = e.read_voxels(local)
+        groups = self.tiling.group(voxels)
+        jobs = (TileJob(gather(self._vol, tile), gather(self._temp, tile), gather(self._src, tile), tile.origin,
+                        tile.local(part), self._score_rows(part)) for tile, part in groups)
+        src = self.sources()
+        for (tile, part), r in zip(groups, self.runner.map(jobs)):
+            self._vol.flat[part], self._temp.flat[part], src[:, part] = r.values, r.temperatures, r.sources
+            self._scores[self._score_rows(part)] = r.scores
+            self.exact_visits += r.visits[0]
+            self.pruned_visits += r.visits[1]
+
+    def _score_rows(self, voxels: np.ndarray) -> np.ndarray:
+        """The balance's score rows of those *voxels* that have one (a multiple of the stride)."""
+        return voxels[voxels % self.stride == 0] // self.stride
 
     def volume(self) -> np.ndarray:
         return self._vol
@@ -150,5 +230,6 @@ class TiledBackend:
         return self._src.reshape(self._src.shape[0], -1)
 
     def scores(self) -> np.ndarray:
-        """As :meth:`clsolid.ml.opencl.CLBackend.scores`: the whole volume's slots."""
-        return self.engine.scores()
+        """As :meth:`clsolid.ml.opencl.CLBackend.scores`: the whole volume's slots, as the tiles
+        gave back those of the voxels they updated."""
+        return self._scores
