@@ -88,6 +88,11 @@ def main(argv: list[str] | None = None) -> None:
         table(args, client)
 
 
+def seconds(r: dict) -> str:
+    """A run's time, marked where its budget stopped it."""
+    return f"{r['seconds']:.1f}{' (stopped)' if r['stopped'] else ''}"
+
+
 def same(a, b) -> str:
     """Whether two runs' volumes are identical ("?" where one was stopped)."""
     return "?" if a["volume"] is None or b["volume"] is None else ("yes" if np.array_equal(a["volume"], b["volume"])
@@ -109,15 +114,14 @@ def table(args, client) -> None:
             image = gallery_exemplar(name, ex_side)
             for likelihood in args.likelihoods:
                 r = run(image, cube, likelihood, args.budget, device)
-                note = " (stopped)" if r["stopped"] else ""
-                row = (f"| {name} | {ex_side}² → {cube}³ | {likelihood} | {r['seconds']:.1f}{note} | "
+                row = (f"| {name} | {ex_side}² → {cube}³ | {likelihood} | {seconds(r)} | "
                        f"{r['sweeps']} ({r['finest_sweeps']}) | {r['per_visit_us']:.1f} |")
                 if args.tile is not None:
                     t = run(image, cube, likelihood, args.budget, device, args.tile)
-                    row += f" {t['seconds']:.1f}{' (stopped)' if t['stopped'] else ''} | {same(r, t)} |"
+                    row += f" {seconds(t)} | {same(r, t)} |"
                     if client is not None:
                         w = run(image, cube, likelihood, args.budget, device, args.tile, client)
-                        row += f" {w['seconds']:.1f}{' (stopped)' if w['stopped'] else ''} | {same(t, w)} |"
+                        row += f" {seconds(w)} | {same(t, w)} |"
                 print(row, flush=True)
 
 

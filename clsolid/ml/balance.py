@@ -46,6 +46,11 @@ def score_stride(shape: tuple[int, int, int]) -> int:
     return s
 
 
+def score_rows(voxels: np.ndarray, stride: int) -> np.ndarray:
+    """The score rows of those flat *voxels* that keep one (a multiple of *stride*)."""
+    return voxels[voxels % stride == 0] // stride
+
+
 def n_score_slots(shape: tuple[int, int, int]) -> int:
     """Rows of the score buffer: one per voxel with ``flat index % stride == 0``."""
     return -(-int(np.prod(shape)) // score_stride(shape))

@@ -10,7 +10,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .balance import project_bias, score_stride, softmax, sweep_target
+from .balance import project_bias, score_rows, score_stride, softmax, sweep_target
 from .forecast import forecast_visits
 from ..errors import InputError
 from ..exemplar import nearest_level_index
@@ -163,7 +163,7 @@ class Balance:
         """
         labels = self.model.labels
         self.index[updated] = nearest_level_index(np.asarray(backend.volume()).ravel()[updated], labels)
-        rows = updated[updated % self.stride == 0] // self.stride
+        rows = score_rows(updated, self.stride)
         if rows.size == 0 or pending.size == 0:
             return self.bias
         scores = np.asarray(backend.scores(), np.float64)[rows]

@@ -348,7 +348,8 @@ class CLBackend:
             self.vol_buf, self.temp_buf, *self._shape_args(), *self.placement, self.vox_buf,
             np.int32(voxels.size), np.int32(m.offsets.shape[0]), self.sums, np.int32(self.n_groups), self.gvals,
             self.kern, self.labels, np.int32(m.labels.size), self.kfactor, self.union,
-            np.int32(m.union_offsets.shape[0]), np.float32(self.params.xi), np.int32(self.params.heuristic_code), *self.sweep_args, *self.score_args)
+            np.int32(m.union_offsets.shape[0]), np.float32(self.params.xi), np.int32(self.params.heuristic_code),
+            *self.sweep_args, *self.score_args)
 
     def read_voxels(self, voxels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The values, temperatures and sources ``(views, m)`` of some voxels of the block (its

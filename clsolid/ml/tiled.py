@@ -34,7 +34,7 @@ import numpy as np
 
 from ..core.tiles import Tiling, gather
 from ..errors import DeviceMemoryError, InputError
-from .balance import n_score_slots, score_stride
+from .balance import n_score_slots, score_rows, score_stride
 from .model import ScaleModel
 from .params import MLParams
 from .pruned import COHERENCE_REACH
@@ -205,19 +205,15 @@ class TiledBackend:
 
     def update(self, voxels: np.ndarray) -> None:
         """Relax one conflict-free set of voxels (flat indices), tile by tile."""
-        groups = self.tiling.group(voxels)
+        groups = [(tile, part, score_rows(part, self.stride)) for tile, part in self.tiling.group(voxels)]
         jobs = (TileJob(gather(self._vol, tile), gather(self._temp, tile), gather(self._src, tile), tile.origin,
-                        tile.local(part), self._score_rows(part)) for tile, part in groups)
+                        tile.local(part), rows) for tile, part, rows in groups)
         src = self.sources()
-        for (tile, part), r in zip(groups, self.runner.map(jobs)):
+        for (tile, part, rows), r in zip(groups, self.runner.map(jobs)):
             self._vol.flat[part], self._temp.flat[part], src[:, part] = r.values, r.temperatures, r.sources
-            self._scores[self._score_rows(part)] = r.scores
+            self._scores[rows] = r.scores
             self.exact_visits += r.visits[0]
             self.pruned_visits += r.visits[1]
-
-    def _score_rows(self, voxels: np.ndarray) -> np.ndarray:
-        """The balance's score rows of those *voxels* that have one (a multiple of the stride)."""
-        return voxels[voxels % self.stride == 0] // self.stride
 
     def volume(self) -> np.ndarray:
         return self._vol

@@ -81,10 +81,10 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
     w = robust_weights(ssd, level.span) * factor
     flat = vol.reshape(-1)
     old = flat[voxels].copy()
-    if hist.values.size <= MAX_PHASES and level.params.balance and level.values.size <= MAX_PHASES:
-        new = balanced_set_vote(level, values, w, old)
-    elif hist.values.size <= MAX_PHASES:
-        new = vote(values, w)
+    if hist.values.size <= MAX_PHASES:
+        # the balance counts phases: only at a level whose exemplar holds nothing but phases
+        balanced = level.params.balance and level.values.size <= MAX_PHASES
+        new = balanced_set_vote(level, values, w, old) if balanced else vote(values, w)
     else:
         new = (w * values).sum(axis=0) / w.sum(axis=0)
     flat[voxels] = new
