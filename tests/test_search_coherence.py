@@ -86,7 +86,8 @@ def test_opencl_run_matches_the_reference(device, method, scales):
 
 def test_coherence_matches_are_near_the_exhaustive_ones(device):
     """On a finished kopf block, each voxel's coherence match is never better than the
-    exhaustive one (it searches a subset) and, on average, not far from it."""
+    exhaustive one (it searches a subset; its distances are summed in another order, so
+    equal ones may differ by float32 rounding) and, on average, not far from it."""
     ex = gallery_exemplar("gravel", 64).astype(np.float64)
     params = SearchParams(method="kopf", search="coherence", scales=2, iterations=3)
     seen = {}
@@ -110,7 +111,7 @@ def test_coherence_matches_are_near_the_exhaustive_ones(device):
     q = voxel_features(vol, seen["coarse"], every, "front", 7)
     exact = level.matcher.best(q, level.w_first)[1].astype(np.float64)
     coh = level.coherence.best(level.matcher, 0, every, q, level.w_first)[1].astype(np.float64)
-    assert (coh >= exact).all()
+    assert (coh >= exact * (1 - 1e-5)).all()
     assert np.mean(np.sqrt(coh)) < 1.3 * np.mean(np.sqrt(exact)), (np.mean(np.sqrt(coh)), np.mean(np.sqrt(exact)))
 
 

@@ -108,6 +108,23 @@ def test_k_nearest_kernel_matches_the_reference_exactly(device, count):
         np.testing.assert_array_equal(got_d, want_d.astype(np.float32))
 
 
+def test_best_match_with_general_weights_and_ragged_batches(device):
+    """Weights other than 0 and 1 (the kernel keeps its multiply), a query count that is no
+    multiple of the queries a work-item takes, and batches that end mid-item."""
+    rng = np.random.default_rng(7)
+    table, _ = exemplar_table(_exemplar(3, (26, 30)), 5)
+    queries = np.clip(table[rng.integers(0, table.shape[0], 301)] + rng.integers(-5, 6, (301, 25)), 0, 255)
+    weights = rng.choice(np.array([0.0, 0.5, 1.0, 2.0], np.float32), 25)
+    want_i, want_d = best_match_reference(queries, table, weights)
+    for batch in (301, 50, 7):
+        got_i, got_d = CLMatcher(device, table, max_batch=batch).best(queries, weights)
+        np.testing.assert_array_equal(got_i, want_i)
+        np.testing.assert_array_equal(got_d, want_d.astype(np.float32))
+    zero = CLMatcher(device, table).best(queries[:9], np.zeros(25, np.float32))  # every site at distance 0
+    np.testing.assert_array_equal(zero[0], 0)
+    np.testing.assert_array_equal(zero[1], 0.0)
+
+
 def test_candidate_distances_kernel_matches_the_reference(device):
     ex = _exemplar(5, (28, 28))
     table, _ = exemplar_table(ex, 7)

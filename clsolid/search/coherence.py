@@ -53,6 +53,14 @@ class Coherence:
         self.site_at[rows, cols] = np.arange(rows.size)
         self.shape, self.views = tuple(volume_shape), views
         self.matched = np.full((len(views), int(np.prod(volume_shape))), -1, np.int64)
+        # What a neighbour matched at site s proposes through its offset j: shift[s, j] (-1:
+        # no valid site); its last row answers for an unknown match (s = -1), as similar's
+        # last row answers for no site, so candidates() needs no masks.
+        off = square_offsets(NEIGHBOURS)
+        every = np.ones((rows.size, off.shape[0]), bool)
+        shifted = self._site(rows[:, None] - off[:, 0], cols[:, None] - off[:, 1], every)
+        self.shift = np.vstack([shifted, np.full((1, off.shape[0]), -1, np.int64)])
+        self.similar_or_none = np.vstack([similar, np.full((1, similar.shape[1]), -1, similar.dtype)])
 
     def _site(self, r: np.ndarray, c: np.ndarray, known: np.ndarray) -> np.ndarray:
         """The site at (r, c), -1 where unknown or not a valid site."""
@@ -79,13 +87,9 @@ class Coherence:
         """``(m, NEIGHBOURS^2 * SIMILAR)`` candidate sites of *voxels* in view *i* (-1: none)."""
         row_axis, col_axis = VIEW_AXES[self.views[i]]
         pos = np.stack(np.unravel_index(voxels, self.shape))
-        off = square_offsets(NEIGHBOURS)  # (n, 2): (dy, dx), row by row
         s = self.matched[i, square_voxels(self.shape, pos, row_axis, col_axis, NEIGHBOURS)]  # (m, n): their matches
-        known = s >= 0
-        s = np.maximum(s, 0)
-        shifted = self._site(self.rows[s] - off[:, 0], self.cols[s] - off[:, 1], known)
-        cand = np.where((shifted >= 0)[:, :, None], self.similar[np.maximum(shifted, 0)], -1)  # (m, n, SIMILAR)
-        return cand.reshape(voxels.size, off.shape[0] * self.similar.shape[1])
+        shifted = self.shift[s, np.arange(s.shape[1])]  # s = -1 reads the last row: -1
+        return self.similar_or_none[shifted].reshape(voxels.size, s.shape[1] * self.similar.shape[1])
 
     def best(self, matcher, i: int, voxels: np.ndarray, queries: np.ndarray,
              weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

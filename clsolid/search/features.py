@@ -92,12 +92,21 @@ def square_voxels(shape: tuple[int, int, int], pos: np.ndarray, row_axis: int, c
     the voxels at *pos* ``(3, m)``, in the plane of (*row_axis*, *col_axis*), read row by row
     (as :func:`~clsolid.search.match.square_offsets`)."""
     stride = (shape[1] * shape[2], shape[2], 1)
-    depth = 3 - row_axis - col_axis
-    r = np.arange(k) - k // 2
-    rows = ((pos[row_axis][:, None] + r) % shape[row_axis]) * stride[row_axis]  # (m, k): k distinct rows
-    cols = ((pos[col_axis][:, None] + r) % shape[col_axis]) * stride[col_axis]
-    base = (pos[depth] % shape[depth]) * stride[depth]
-    return (base[:, None, None] + rows[:, :, None] + cols[:, None, :]).reshape(pos.shape[1], k * k)
+    r = k // 2
+    pos = np.asarray(pos) % np.array(shape)[:, None]
+    d = np.arange(k) - r
+    delta = (d[:, None] * stride[row_axis] + d[None, :] * stride[col_axis]).ravel()
+    out = (pos[0] * stride[0] + pos[1] * stride[1] + pos[2] * stride[2])[:, None] + delta  # no square wraps
+    wraps = ((pos[row_axis] < r) | (pos[row_axis] >= shape[row_axis] - r)
+             | (pos[col_axis] < r) | (pos[col_axis] >= shape[col_axis] - r))
+    if wraps.any():  # near a face the square wraps round: row and column each modulo their axis
+        p = pos[:, wraps]
+        rows = ((p[row_axis][:, None] + d) % shape[row_axis]) * stride[row_axis]  # (w, k)
+        cols = ((p[col_axis][:, None] + d) % shape[col_axis]) * stride[col_axis]
+        depth = 3 - row_axis - col_axis
+        base = p[depth] * stride[depth]
+        out[wraps] = (base[:, None, None] + rows[:, :, None] + cols[:, None, :]).reshape(p.shape[1], k * k)
+    return out
 
 
 def _square(vol: np.ndarray, pos: np.ndarray, row_axis: int, col_axis: int, k: int) -> np.ndarray:

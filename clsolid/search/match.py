@@ -174,6 +174,40 @@ def candidate_sets(matcher: Any, table: np.ndarray, count: int, weights: np.ndar
     return np.concatenate([self_, others], axis=1)
 
 
+def _queries_per_item(device: Device, count: int) -> int:
+    """Queries a work-item of ``k_nearest`` takes. On a CPU, 8 for the best match: each table
+    vector loaded then serves eight (``tools/bench_search.py`` on a Zen 5, Intel's runtime:
+    22 G terms/s at 1, 57 at 2, 86 at 4, 102 at 8). Otherwise 1: longer lists, and a GPU's
+    work-items, would hold eight queries' private arrays (not measured on a GPU yet)."""
+    return 8 if count == 1 and device.is_cpu else 1
+
+
+class _Layout:
+    """A table on the device for one set of weights: only the terms of nonzero weight (a
+    term of weight 0 adds exactly 0 to every distance), transposed for the exhaustive
+    search (sites along the vectors, padded with :data:`PAD`) and row by row for
+    candidates; ``unit`` when every weight kept is 1, so the kernels leave the multiply out."""
+
+    def __init__(self, device: Device, table: np.ndarray, weights: np.ndarray, n_pad: int, vw: int) -> None:
+        import pyopencl as cl
+
+        keep = np.flatnonzero(weights > 0)
+        self.keep = keep if keep.size else np.array([0])  # all zero: one term of weight 0
+        self.unit = bool(np.all(weights[self.keep] == 1.0))
+        dim, width = self.keep.size, -(-self.keep.size // vw) * vw
+        table_t = np.full((dim, n_pad), PAD, np.float32)  # sites along the vectors
+        table_t[:, : table.shape[0]] = table[:, self.keep].T
+        rows = np.zeros((table.shape[0], width), np.float32)  # whole vectors a row, zero padded
+        rows[:, :dim] = table[:, self.keep]
+        kept = np.zeros(width, np.float32)
+        kept[:dim] = weights[self.keep]
+        mf, ctx = cl.mem_flags, device.context
+        self.table_t = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=table_t)
+        self.rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
+        self.weights = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=kept)
+        self.places = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=self.keep.astype(np.int32))
+
+
 class CLMatcher:
     """Nearest-neighbourhood search on an OpenCL device, for a fixed table.
 
@@ -197,7 +231,6 @@ class CLMatcher:
         if self.table.ndim != 2 or self.table.shape[0] == 0:
             raise InputError(f"the table must be a non-empty (n_sites, dim) array; got shape {self.table.shape}")
         self.device, self.dim, self.max_batch = device, self.table.shape[1], int(max_batch)
-        weights = _weights(weights, self.dim)
         for name, nbytes in (("match table", self.table.nbytes + 16 * self.dim * 4),  # each of two copies
                              ("match queries", self.max_batch * self.dim * 4),
                              ("match results", self.max_batch * MAX_K * 4)):
@@ -205,25 +238,33 @@ class CLMatcher:
                 raise DeviceMemoryError(name, nbytes, device.max_alloc)
         self._vw = probe(device.device).vector_width or VECTOR_WIDTHS[0]
         self.n_pad = -(-self.table.shape[0] // self._vw) * self._vw
-        table_t = np.full((self.dim, self.n_pad), PAD, np.float32)  # sites along the vectors
-        table_t[:, : self.table.shape[0]] = self.table.T
+        self._layouts: dict[bytes, _Layout] = {}
+        self._layout = self._layout_of(_weights(weights, self.dim))
         mf = cl.mem_flags
-        ctx = device.context
-        self._table = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=table_t)
-        self._rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=self.table)  # for candidates
-        self._weights = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=weights)
-        self._queries = cl.Buffer(ctx, mf.READ_ONLY, self.max_batch * self.dim * 4)
-        self._site = cl.Buffer(ctx, mf.READ_WRITE, self.max_batch * MAX_K * 4)
-        self._dist = cl.Buffer(ctx, mf.WRITE_ONLY, self.max_batch * MAX_K * 4)
+        self._queries = cl.Buffer(device.context, mf.READ_ONLY, self.max_batch * self.dim * 4)
+        self._site = cl.Buffer(device.context, mf.READ_WRITE, self.max_batch * MAX_K * 4)
+        self._dist = cl.Buffer(device.context, mf.WRITE_ONLY, self.max_batch * MAX_K * 4)
+
+    def _layout_of(self, weights: np.ndarray) -> "_Layout":
+        """The device tables for *weights* (built once per distinct weights; a run uses two)."""
+        key = weights.tobytes()
+        if key not in self._layouts:
+            self._layouts[key] = _Layout(self.device, self.table, weights, self.n_pad, self._vw)
+        return self._layouts[key]
 
     def _kernel(self, name: str, count: int = 1):
-        return programs.build(self.device, "search/match.cl", {"DIM": self.dim, "VW": self._vw, "K": count})[name]
+        lay = self._layout
+        defines = {"QDIM": self.dim, "DIM": lay.keep.size, "VW": self._vw, "K": count, "QB": _queries_per_item(self.device, count),
+                   "UNIT": int(lay.unit)}
+        return programs.build(self.device, "search/match.cl", defines)[name]
 
     def _set_weights(self, weights: np.ndarray | None) -> None:
-        import pyopencl as cl
-
         if weights is not None:
-            cl.enqueue_copy(self.device.queue, self._weights, _weights(weights, self.dim))
+            self._layout = self._layout_of(_weights(weights, self.dim))
+
+    def _as_queries(self, queries: np.ndarray) -> np.ndarray:
+        """The queries, float32, contiguous (the kernels read only the terms kept)."""
+        return np.ascontiguousarray(_check_queries(queries, self.dim), np.float32)
 
     def nearest(self, queries: np.ndarray, count: int,
                 weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -237,15 +278,16 @@ class CLMatcher:
 
         count = _check_count(count, self.table.shape[0])
         self._set_weights(weights)
-        q = np.ascontiguousarray(_check_queries(queries, self.dim), np.float32)
+        q = self._as_queries(queries)
         idx, dist = np.empty((q.shape[0], count), np.int32), np.empty((q.shape[0], count), np.float32)
         queue, kernel, batch = self.device.queue, self._kernel("k_nearest", count), self.max_batch
+        lay, per_item = self._layout, _queries_per_item(self.device, count)
         for i in range(0, q.shape[0], batch):
             part = q[i : i + batch]
             n = part.shape[0]
             cl.enqueue_copy(queue, self._queries, part)
-            # explicit work-groups: CPU runtimes vectorise across the queries of a group
-            kernel(queue, (-(-n // LOCAL) * LOCAL,), (LOCAL,), self._queries, self._table, self._weights,
+            items = -(-n // per_item)
+            kernel(queue, (-(-items // LOCAL) * LOCAL,), (LOCAL,), self._queries, lay.places, lay.table_t, lay.weights,
                    np.int32(n), np.int32(self.n_pad), self._site, self._dist)
             cl.enqueue_copy(queue, idx[i : i + n], self._site)
             cl.enqueue_copy(queue, dist[i : i + n], self._dist)
@@ -267,7 +309,7 @@ class CLMatcher:
         import pyopencl as cl
 
         self._set_weights(weights)
-        q = np.ascontiguousarray(_check_queries(queries, self.dim), np.float32)
+        q = self._as_queries(queries)
         cand = np.ascontiguousarray(_check_candidates(candidates, q.shape[0], self.table.shape[0]), np.int32)
         n_cand = cand.shape[1]
         out = np.empty(cand.shape, np.float32)
@@ -277,9 +319,9 @@ class CLMatcher:
             n = min(batch, q.shape[0] - i)
             cl.enqueue_copy(queue, self._queries, q[i : i + n])
             cl.enqueue_copy(queue, self._site, cand[i : i + n])
-            pairs = n * n_cand
-            kernel(queue, (-(-pairs // LOCAL) * LOCAL,), (LOCAL,), self._queries, self._rows, self._weights,
-                   self._site, np.int32(pairs), np.int32(n_cand), self._dist)
+            lay = self._layout
+            kernel(queue, (-(-n // LOCAL) * LOCAL,), (LOCAL,), self._queries, lay.places, lay.rows, lay.weights,
+                   self._site, np.int32(n), np.int32(n_cand), self._dist)
             cl.enqueue_copy(queue, out[i : i + n], self._dist)
         return out
 
