@@ -7,6 +7,7 @@ import pytest
 
 import clsolid
 from clsolid.gallery import gallery_exemplar
+from clsolid.core.schedule import colour_sets
 from clsolid.search.coherence import SIMILAR, Coherence
 from clsolid.search.driver import run_search
 from clsolid.search.features import valid_sites
@@ -65,6 +66,43 @@ def test_without_candidates_the_search_is_exhaustive():
     want = best_match_reference(queries, table)
     assert site.tolist() == want[0].tolist() and dist.tolist() == want[1].tolist()
     assert coh.matched[0, [0, 3, 5]].tolist() == site.tolist()  # recorded for the neighbours
+
+
+@pytest.mark.parametrize("parent", [False, True])
+def test_the_kernel_searches_as_the_numpy_gathering_does(device, parent):
+    """coherence_best gathers squares, parents and proposals on the device: the same sites,
+    distances and recorded matches as Coherence.best on NumPy's gathers, for voxels whose
+    squares wrap, a view whose neighbours know nothing (an exhaustive search) and two weightings."""
+    from clsolid.search.features import centre_weights, exemplar_features, voxel_features
+    from clsolid.search.match import candidate_sets
+    from clsolid.search.pyramid import gaussian_pyramid
+
+    rng = np.random.default_rng(3)
+    pyr = gaussian_pyramid(gallery_exemplar("gravel", 64)[:24, :28].astype(np.float64), 2)
+    k, shape = 5, (10, 10, 10)
+    table, _ = exemplar_features(pyr[0], pyr[1] if parent else None, k)
+    rows, cols = valid_sites(pyr[0].shape, pyr[1].shape if parent else None, k)
+    matcher = CLMatcher(device, table)
+    similar = candidate_sets(matcher, table, SIMILAR, centre_weights(k, parent, centre=True))
+    views = ("front", "right", "top")
+    twins = [Coherence(rows, cols, pyr[0].shape, similar, shape, views) for _ in range(2)]
+    known = rng.integers(-rows.size // 3, rows.size, (len(views), int(np.prod(shape))))  # about 1 in 4 unknown
+    vol, coarse = rng.random(shape) * 255, (rng.random((3, 5, 5)) * 255 if parent else None)
+    for twin in twins:
+        twin.matched[...] = np.maximum(known, -1)
+    colour = colour_sets(shape, k // 2)[0].ravel()  # conflict-free, as the driver's sets
+    for centre, corner in ((False, 0), (True, vol.size - 1)):  # at a corner every square wraps
+        voxels = np.flatnonzero(colour == colour[corner])
+        w = centre_weights(k, parent, centre)
+        for i, view in enumerate(views):
+            got = twins[0].search(matcher, i, voxels, vol, coarse, k, w)
+            want = twins[1].best(matcher, i, voxels, voxel_features(vol, coarse, voxels, view, k), w)
+            np.testing.assert_array_equal(got[0], want[0])
+            np.testing.assert_array_equal(got[1], want[1])
+            np.testing.assert_array_equal(twins[0].matched, twins[1].matched)
+        for twin in twins:  # nothing known in the front view: every voxel searched exhaustively there
+            twin.matched[0] = -1
+        twins[0]._device._sent[0] = False  # the host's copy changed: the device's is sent again
 
 
 @pytest.mark.parametrize("method, scales", [("wl", 1), ("kopf", 1), ("chen-wang", 1), ("kopf", 2)])

@@ -118,7 +118,7 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
     dist = np.empty((n_views, voxels.size))
     for i, view in enumerate(level.params.view_names):
         queries = voxel_features(vol, coarse, voxels, view, k)
-        best = level.best(i, voxels, queries, level.w_first)[0]
+        best = level.best(i, voxels, vol, coarse, level.w_first, queries)[0]
         chosen[i], dist[i] = choose(level, queries, best)
         _recount(src.index, src.chosen[i, voxels], chosen[i])  # the next view sees this one's choices
         src.chosen[i, voxels] = chosen[i]

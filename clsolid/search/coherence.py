@@ -13,15 +13,23 @@ Each voxel's last match in each view is kept. A finer level starts from the coar
 level's matches: the parent's site (r, c) becomes the site (2r + row parity, 2c + column
 parity) of the voxel in that plane, where that is a valid site; the coarsest level's first
 pass is exhaustive.
+
+On an OpenCL matcher (:class:`~clsolid.search.match.CLMatcher`) :meth:`Coherence.search`
+runs the whole of it for a set in one kernel (``coherence_best``, :class:`DeviceSearch`):
+the voxels' neighbourhoods, their neighbours' proposals and the distances are gathered
+on the device. :meth:`Coherence.best` is the same search with the gathering in NumPy (the
+reference the kernel is tested against, and the path of the float64 matcher).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from typing import Any
+
 from ..core.views import VIEW_AXES
-from .features import square_voxels
-from .match import square_offsets
+from .features import square_voxels, voxel_features
+from .match import LOCAL, CLMatcher, square_offsets
 
 #: Side of the square of neighbours whose matches propose candidates.
 NEIGHBOURS = 3
@@ -61,6 +69,7 @@ class Coherence:
         shifted = self._site(rows[:, None] - off[:, 0], cols[:, None] - off[:, 1], every)
         self.shift = np.vstack([shifted, np.full((1, off.shape[0]), -1, np.int64)])
         self.similar_or_none = np.vstack([similar, np.full((1, similar.shape[1]), -1, similar.dtype)])
+        self._device: DeviceSearch | None = None
 
     def _site(self, r: np.ndarray, c: np.ndarray, known: np.ndarray) -> np.ndarray:
         """The site at (r, c), -1 where unknown or not a valid site."""
@@ -103,4 +112,103 @@ class Coherence:
         if blind.any():
             site[blind], least[blind] = matcher.best(queries[blind], weights)
         self.matched[i, voxels] = site
+        return site, least
+
+    def search(self, matcher: Any, i: int, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None,
+               k: int, weights: np.ndarray, queries: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`best` for *voxels* of the block *vol* (*coarse*: the parent level, k: the
+        square's side): in one kernel on an OpenCL *matcher*, else with *queries* (gathered
+        here if not given)."""
+        if isinstance(matcher, CLMatcher):
+            if self._device is None:
+                self._device = DeviceSearch(self, matcher)
+            return self._device.best(i, voxels, vol, coarse, k, weights)
+        if queries is None:
+            queries = voxel_features(vol, coarse, voxels, self.views[i], k)
+        return self.best(matcher, i, voxels, queries, weights)
+
+
+class DeviceSearch:
+    """:meth:`Coherence.best` in one kernel on *matcher*'s device (``coherence_best``).
+
+    The host's :attr:`Coherence.matched` stays the truth; the device keeps a copy per view,
+    which the kernel updates as the host does, and which is sent again after the host
+    changed it otherwise (an exhaustive search of voxels without candidates). The block is
+    sent with every set (the method has changed it since), the parent level once.
+    """
+
+    def __init__(self, coh: Coherence, matcher: CLMatcher) -> None:
+        import pyopencl as cl
+
+        assert NEIGHBOURS == 3  # the kernel reads the 3 x 3 neighbours
+        self.coh, self.matcher = coh, matcher
+        ctx, mf = matcher.device.context, cl.mem_flags
+        n_voxels = coh.matched.shape[1]
+
+        def table(a: np.ndarray):
+            return cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a, np.int32))
+
+        self._shift, self._similar = table(coh.shift), table(coh.similar_or_none)
+        self._matched = [cl.Buffer(ctx, mf.READ_WRITE, 4 * n_voxels) for _ in coh.views]
+        self._sent = [False] * len(coh.views)
+        self._vol = cl.Buffer(ctx, mf.READ_ONLY, 4 * n_voxels)
+        self._coarse, self._coarse_of = None, None
+        self._room, self._voxels, self._sites, self._dists = 0, None, None, None
+
+    def _buffers(self, m: int) -> None:
+        """Room for a set of *m* voxels."""
+        import pyopencl as cl
+
+        if m > self._room:
+            ctx, mf = self.matcher.device.context, cl.mem_flags
+            self._room = m
+            self._voxels = cl.Buffer(ctx, mf.READ_ONLY, 4 * m)
+            self._sites = cl.Buffer(ctx, mf.WRITE_ONLY, 4 * m)
+            self._dists = cl.Buffer(ctx, mf.WRITE_ONLY, 4 * m)
+
+    def _send_coarse(self, coarse: np.ndarray | None):
+        import pyopencl as cl
+
+        if coarse is None:
+            return self._vol, (1, 1, 1)  # not read (PARENT = 0)
+        if coarse is not self._coarse_of:
+            data = np.ascontiguousarray(coarse, np.float32)
+            self._coarse = cl.Buffer(self.matcher.device.context, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,
+                                     hostbuf=data)
+            self._coarse_of = coarse
+        return self._coarse, coarse.shape
+
+    def best(self, i: int, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None, k: int,
+             weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        import pyopencl as cl
+
+        coh, matcher, queue = self.coh, self.matcher, self.matcher.device.queue
+        m = voxels.size
+        if m == 0:
+            return np.empty(0, np.int64), np.empty(0, np.float32)
+        lay = matcher.layout(weights)
+        kernel = matcher.kernel("coherence_best", KSIDE=k, PARENT=int(coarse is not None),
+                                SIMILAR=coh.similar.shape[1])
+        self._buffers(m)
+        if not self._sent[i]:
+            cl.enqueue_copy(queue, self._matched[i], np.ascontiguousarray(coh.matched[i], np.int32))
+            self._sent[i] = True
+        cl.enqueue_copy(queue, self._vol, np.ascontiguousarray(vol, np.float32))
+        cl.enqueue_copy(queue, self._voxels, np.ascontiguousarray(voxels, np.int32))
+        coarse_buf, cshape = self._send_coarse(coarse)
+        row_axis, col_axis = VIEW_AXES[coh.views[i]]
+        kernel(queue, (-(-m // LOCAL) * LOCAL,), (LOCAL,), self._vol, *map(np.int32, vol.shape), coarse_buf,
+               *map(np.int32, cshape), np.int32(row_axis), np.int32(col_axis), self._voxels, np.int32(m),
+               self._matched[i], self._shift, self._similar, np.int32(coh.similar.shape[0]), lay.places, lay.rows,
+               lay.weights, self._sites, self._dists)
+        site, least = np.empty(m, np.int32), np.empty(m, np.float32)
+        cl.enqueue_copy(queue, site, self._sites)
+        cl.enqueue_copy(queue, least, self._dists)
+        site = site.astype(np.int64)
+        blind = site < 0
+        if blind.any():  # no neighbour proposes a site: an exhaustive search, on the host's copy too
+            queries = voxel_features(vol, coarse, voxels[blind], coh.views[i], k)
+            site[blind], least[blind] = matcher.best(queries, weights)
+            self._sent[i] = False
+        coh.matched[i, voxels] = site
         return site, least

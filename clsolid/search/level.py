@@ -9,6 +9,7 @@ import numpy as np
 
 from ..core.views import DEPTH_AXIS
 from ..exemplar import nearest_level_index
+from .features import voxel_features
 from .params import SearchParams
 
 
@@ -87,11 +88,16 @@ class Level:
     sources: Any = None
     coherence: Any = None
 
-    def best(self, view: int, voxels: np.ndarray, queries: np.ndarray,
-             weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The best match of *voxels* (their *queries*) in the *view*-th constrained view:
-        exhaustive, or among k-coherence candidates (``search="coherence"``,
-        :class:`~clsolid.search.coherence.Coherence`). Returns ``(site (m,), distance (m,))``."""
-        if self.coherence is None:
-            return self.matcher.best(queries, weights)
-        return self.coherence.best(self.matcher, view, voxels, queries, weights)
+    def best(self, view: int, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None,
+             weights: np.ndarray, queries: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The best match of *voxels* of the block *vol* (*coarse*: the parent level's) in the
+        *view*-th constrained view: exhaustive, or among k-coherence candidates
+        (``search="coherence"``, :meth:`~clsolid.search.coherence.Coherence.search`).
+        *queries*, their neighbourhoods, are gathered here unless given. Returns
+        ``(site (m,), distance (m,))``."""
+        k = self.params.neighborhood
+        if self.coherence is not None:
+            return self.coherence.search(self.matcher, view, voxels, vol, coarse, k, weights, queries)
+        if queries is None:
+            queries = voxel_features(vol, coarse, voxels, self.params.view_names[view], k)
+        return self.matcher.best(queries, weights)

@@ -252,15 +252,18 @@ class CLMatcher:
             self._layouts[key] = _Layout(self.device, self.table, weights, self.n_pad, self._vw)
         return self._layouts[key]
 
-    def _kernel(self, name: str, count: int = 1):
+    def kernel(self, name: str, count: int = 1, **defines: int):
+        """Kernel *name* of ``search/match.cl`` built for the current weights (and *defines*)."""
         lay = self._layout
-        defines = {"QDIM": self.dim, "DIM": lay.keep.size, "VW": self._vw, "K": count, "QB": _queries_per_item(self.device, count),
-                   "UNIT": int(lay.unit)}
+        defines.update(QDIM=self.dim, DIM=lay.keep.size, VW=self._vw, K=count, UNIT=int(lay.unit),
+                       QB=_queries_per_item(self.device, count))
         return programs.build(self.device, "search/match.cl", defines)[name]
 
-    def _set_weights(self, weights: np.ndarray | None) -> None:
+    def layout(self, weights: np.ndarray | None = None) -> "_Layout":
+        """The device tables of *weights*, which replace the current ones (if given)."""
         if weights is not None:
             self._layout = self._layout_of(_weights(weights, self.dim))
+        return self._layout
 
     def _as_queries(self, queries: np.ndarray) -> np.ndarray:
         """The queries, float32, contiguous (the kernels read only the terms kept)."""
@@ -277,10 +280,10 @@ class CLMatcher:
         import pyopencl as cl
 
         count = _check_count(count, self.table.shape[0])
-        self._set_weights(weights)
+        self.layout(weights)
         q = self._as_queries(queries)
         idx, dist = np.empty((q.shape[0], count), np.int32), np.empty((q.shape[0], count), np.float32)
-        queue, kernel, batch = self.device.queue, self._kernel("k_nearest", count), self.max_batch
+        queue, kernel, batch = self.device.queue, self.kernel("k_nearest", count), self.max_batch
         lay, per_item = self._layout, _queries_per_item(self.device, count)
         for i in range(0, q.shape[0], batch):
             part = q[i : i + batch]
@@ -308,12 +311,12 @@ class CLMatcher:
         (+inf for a negative candidate). *weights* as for :meth:`best`."""
         import pyopencl as cl
 
-        self._set_weights(weights)
+        self.layout(weights)
         q = self._as_queries(queries)
         cand = np.ascontiguousarray(_check_candidates(candidates, q.shape[0], self.table.shape[0]), np.int32)
         n_cand = cand.shape[1]
         out = np.empty(cand.shape, np.float32)
-        queue, kernel = self.device.queue, self._kernel("candidate_distances")
+        queue, kernel = self.device.queue, self.kernel("candidate_distances")
         batch = max(1, min(self.max_batch, self.max_batch * MAX_K // max(n_cand, 1)))  # pairs fit _site/_dist
         for i in range(0, q.shape[0], batch):
             n = min(batch, q.shape[0] - i)

@@ -10,16 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .features import voxel_features
 from .level import Level
 
 
 def matches(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray,
             weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each view's best site and its weighted squared distance, ``(views, m)`` each."""
-    k = level.params.neighborhood
-    found = [level.best(i, voxels, voxel_features(vol, coarse, voxels, v, k), weights)
-             for i, v in enumerate(level.params.view_names)]
+    found = [level.best(i, voxels, vol, coarse, weights) for i in range(len(level.params.view_names))]
     return np.stack([f[0] for f in found]), np.stack([f[1] for f in found]).astype(np.float64)
 
 

@@ -99,12 +99,44 @@ __kernel void k_nearest(__global const float *queries, __global const int *keep,
 /* Vectors of VW terms a candidate's row takes (the rows are padded with zeros to NV * VW). */
 #define NV ((DIM + VW - 1) / VW)
 
+/* The query's kept terms (xs: QDIM terms) and the weights as NV vectors each, zero padded. */
+static void query_vectors(const float *xs, __global const int *keep, __global const float *weights,
+                          floatv *x, floatv *w)
+{
+    float xv[NV * VW], wv[NV * VW];
+    for (int d = 0; d < NV * VW; ++d) {
+        xv[d] = d < DIM ? xs[keep[d]] : 0.0f;
+        wv[d] = weights[d];
+    }
+    for (int v = 0; v < NV; ++v) {
+        x[v] = VLOAD(v, xv);
+        w[v] = VLOAD(v, wv);
+    }
+}
+
+/* The weighted SSD between a query (x, w: query_vectors) and one row of the table, VW
+ * contiguous terms at a time, the VW partial sums added at the end. */
+static float row_distance(const floatv *x, const floatv *w, __global const float *row)
+{
+    floatv acc = (floatv)(0.0f);
+    for (int v = 0; v < NV; ++v) {
+        const floatv e = x[v] - VLOAD(v, row);
+        acc = TERM(e, w[v], acc);
+    }
+    float lane[VW];
+    VSTORE(acc, 0, lane);
+    float sum = 0.0f;
+    for (int l = 0; l < VW; ++l)
+        sum += lane[l];
+    return sum;
+}
+
 /* dists[q*n_cand + j]: the weighted SSD between query q and site cand[q*n_cand + j]
  * (+inf for a negative site: no candidate). One work-item per query, its terms read once
  * into private vectors; each candidate's row (table: (n_sites, NV * VW), row-major, zero
- * padded, as the weights are) is read VW contiguous terms at a time, and the VW partial
- * sums added at the end (in another order than k_nearest's: equal for integer grey levels,
- * within rounding otherwise; a candidate's distance is only compared with other candidates'). */
+ * padded, as the weights are) by row_distance: in another order than k_nearest's sums
+ * (equal for integer grey levels, within rounding otherwise; a candidate's distance is only
+ * compared with other candidates'). */
 __kernel void candidate_distances(__global const float *queries, __global const int *keep,
                                   __global const float *table,
                                   __global const float *weights, __global const int *cand,
@@ -113,32 +145,92 @@ __kernel void candidate_distances(__global const float *queries, __global const 
     const int q = get_global_id(0);
     if (q >= n_queries)
         return;
-    float xs[NV * VW], ws[NV * VW], lane[VW];
-    for (int d = 0; d < NV * VW; ++d) {
-        xs[d] = d < DIM ? queries[(size_t)q * QDIM + keep[d]] : 0.0f;
-        ws[d] = weights[d];
-    }
+    float xs[QDIM];
+    for (int d = 0; d < QDIM; ++d)
+        xs[d] = queries[(size_t)q * QDIM + d];
     floatv x[NV], w[NV];
-    for (int v = 0; v < NV; ++v) {
-        x[v] = VLOAD(v, xs);
-        w[v] = VLOAD(v, ws);
-    }
+    query_vectors(xs, keep, weights, x, w);
     for (int j = 0; j < n_cand; ++j) {
         const size_t i = (size_t)q * n_cand + j;
         const int site = cand[i];
-        float sum = INFINITY;
-        if (site >= 0) {
-            __global const float *row = table + (size_t)site * (NV * VW);
-            floatv acc = (floatv)(0.0f);
-            for (int v = 0; v < NV; ++v) {
-                const floatv e = x[v] - VLOAD(v, row);
-                acc = TERM(e, w[v], acc);
-            }
-            VSTORE(acc, 0, lane);
-            sum = 0.0f;
-            for (int l = 0; l < VW; ++l)
-                sum += lane[l];
-        }
-        dists[i] = sum;
+        dists[i] = site < 0 ? INFINITY : row_distance(x, w, table + (size_t)site * (NV * VW));
     }
 }
+
+#ifdef KSIDE
+/* The k-coherence search of one view for a conflict-free set, gathering on the device what
+ * clsolid.search.coherence does on the host (compile-time KSIDE: the square's side; PARENT:
+ * 1 if a coarser level's 3 x 3 square follows it; SIMILAR: sites per proposal).
+ *
+ * vol: the level's block (Z, Y, X) float, toroidal; coarse: the coarser block (cz, cy, cx).
+ * The query of voxel v = voxels[i] is its KSIDE x KSIDE square in the plane (row_axis,
+ * col_axis), row by row, then the parent's 3 x 3 square around (z/2, y/2, x/2). Each of the
+ * 3 x 3 neighbours n of v in the plane (v included, row by row) proposes
+ * similar[shift[matched[n], j], :] (j: n's place; a row of -1 for an unknown match or an
+ * invalid shift: shift and similar end with it, at row n_sites). v's match is the candidate
+ * of least row_distance, the lowest site on a tie; sites[i] = -1 (dists[i] = +inf) where no
+ * neighbour proposes one. matched[v] takes the match: the set's voxels are farther apart
+ * than the neighbours read, so no work-item reads what another writes. */
+static int wrap(int a, int n)
+{
+    const int m = a % n;
+    return m < 0 ? m + n : m;
+}
+
+__kernel void coherence_best(__global const float *vol, int vz, int vy, int vx,
+                             __global const float *coarse, int cz, int cy, int cx,
+                             int row_axis, int col_axis, __global const int *voxels, int n,
+                             __global int *matched, __global const int *shift, __global const int *similar,
+                             int n_sites, __global const int *keep, __global const float *table,
+                             __global const float *weights, __global int *sites, __global float *dists)
+{
+    const int i = get_global_id(0);
+    if (i >= n)
+        return;
+    const int v = voxels[i];
+    const int dims[3] = {vz, vy, vx}, stride[3] = {vy * vx, vx, 1};
+    const int pos[3] = {v / (vy * vx), (v / vx) % vy, v % vx};
+    const int depth = 3 - row_axis - col_axis, base = pos[depth] * stride[depth];
+    float xs[QDIM];
+    for (int a = 0; a < KSIDE; ++a) {
+        const int row = wrap(pos[row_axis] + a - KSIDE / 2, dims[row_axis]) * stride[row_axis];
+        for (int b = 0; b < KSIDE; ++b)
+            xs[a * KSIDE + b] = vol[base + row + wrap(pos[col_axis] + b - KSIDE / 2, dims[col_axis]) * stride[col_axis]];
+    }
+#if PARENT
+    const int cdims[3] = {cz, cy, cx}, cstride[3] = {cy * cx, cx, 1};
+    const int ppos[3] = {(pos[0] / 2) % cz, (pos[1] / 2) % cy, (pos[2] / 2) % cx};
+    const int cbase = ppos[depth] * cstride[depth];
+    for (int a = 0; a < 3; ++a) {
+        const int row = wrap(ppos[row_axis] + a - 1, cdims[row_axis]) * cstride[row_axis];
+        for (int b = 0; b < 3; ++b)
+            xs[KSIDE * KSIDE + a * 3 + b] = coarse[cbase + row + wrap(ppos[col_axis] + b - 1, cdims[col_axis]) * cstride[col_axis]];
+    }
+#endif
+    floatv x[NV], w[NV];
+    query_vectors(xs, keep, weights, x, w);
+    float least = INFINITY;
+    int best = -1;
+    for (int a = 0; a < 3; ++a) {
+        const int row = wrap(pos[row_axis] + a - 1, dims[row_axis]) * stride[row_axis];
+        for (int b = 0; b < 3; ++b) {
+            const int s = matched[base + row + wrap(pos[col_axis] + b - 1, dims[col_axis]) * stride[col_axis]];
+            const int sh = shift[(s < 0 ? n_sites : s) * 9 + a * 3 + b];
+            for (int t = 0; t < SIMILAR; ++t) {
+                const int c = similar[(sh < 0 ? n_sites : sh) * SIMILAR + t];
+                if (c < 0)
+                    continue;
+                const float d = row_distance(x, w, table + (size_t)c * (NV * VW));
+                if (d < least || (d == least && c < best)) {
+                    least = d;
+                    best = c;
+                }
+            }
+        }
+    }
+    sites[i] = best;
+    dists[i] = least;
+    if (best >= 0)
+        matched[v] = best;
+}
+#endif
