@@ -9,6 +9,7 @@ import numpy as np
 
 from .errors import InputError
 from .ml.params import MLParams
+from .core.hostmemory import check_host_memory
 from .ml.driver import SweepInfo, SynthesisResult, check_shape, resolve_seed, run_ml
 
 log = logging.getLogger(__name__)
@@ -314,6 +315,7 @@ def synthesize(
 
 def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_output, hook, state):
     """Run (or, from *state*, go on with) a likelihood synthesis and shape its result."""
+    check_host_memory(shape, "ml")
     vol, timings, bandwidths = run_ml(levels_of.labels, shape, params, seed, backend, progress,
                                       checkpoint=hook, resume=state)
     labels = np.rint(vol).astype(np.uint8 if levels_of.values.size <= 256 else np.uint16)
@@ -400,6 +402,7 @@ def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, lev
     if site_map and not full_output:
         raise InputError("site_map=True needs full_output=True (the map is SynthesisResult.site_use)")
     image, levels_of, seed = _load(exemplar, levels, rng, options)
+    check_host_memory(shape, "search")
     grey = levels_of.to_values(levels_of.labels).astype(np.float64)
     if is_reference(device):
         name, make_matcher = "reference (NumPy float64)", ReferenceMatcher

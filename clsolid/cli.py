@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 from .core.views import DEPTH_AXIS, VIEW_SETS
-from .errors import ClsolidError, DeviceMemoryError, InputError, KernelBuildError, NoDeviceError
+from .errors import ClsolidError, DeviceMemoryError, HostMemoryError, InputError, KernelBuildError, NoDeviceError
 from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, LIKELIHOODS, RELAXATIONS, SLICE_LAYOUTS,
                      UPSAMPLING, MLParams)
 from .presets import PRESETS, Preset, get_preset
@@ -25,7 +25,7 @@ from .search.params import METHODS as SEARCH_METHODS
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_NO_DEVICE, EXIT_MEMORY, EXIT_BUILD = 0, 1, 2, 3, 4, 5
 _EXIT_OF = ((InputError, EXIT_USAGE), (NoDeviceError, EXIT_NO_DEVICE),
-            (DeviceMemoryError, EXIT_MEMORY), (KernelBuildError, EXIT_BUILD))
+            (DeviceMemoryError, EXIT_MEMORY), (HostMemoryError, EXIT_MEMORY), (KernelBuildError, EXIT_BUILD))
 
 
 #: The synth subcommand's defaults, filled in when its parser is built (for _check_method_flags).

@@ -41,6 +41,23 @@ class DeviceMemoryError(ClsolidError, MemoryError):
         return DeviceMemoryError(self.buffer, self.nbytes, self.limit, self.what, advice)
 
 
+class HostMemoryError(ClsolidError, MemoryError):
+    """A block would take more host memory than is available (checked before allocating;
+    :mod:`clsolid.core.hostmemory`)."""
+
+    def __init__(self, shape: tuple[int, int, int], need: int, have: int, per_voxel: int):
+        self.shape, self.need, self.have, self.per_voxel = tuple(shape), int(need), int(have), int(per_voxel)
+        super().__init__(
+            f"a {'x'.join(map(str, self.shape))} block needs about {need / 2**30:.1f} GiB of host memory "
+            f"(about {per_voxel} bytes a voxel: the host keeps the whole block and its state, tiled or "
+            f"not), but {have / 2**30:.1f} GiB is available; grow a smaller block, free memory or use "
+            "a machine with more (CLSOLID_HOST_MEMORY=64G overrides the figure available, as with swap)"
+        )
+
+    def __reduce__(self):
+        return type(self), (self.shape, self.need, self.have, self.per_voxel)
+
+
 class KernelBuildError(ClsolidError, RuntimeError):
     """An OpenCL program failed to compile on the chosen device."""
 

@@ -1,0 +1,58 @@
+"""The host-memory check (clsolid.core.hostmemory): a block the host cannot hold is refused
+before anything is allocated, through the API and the command line."""
+
+import pickle
+
+import pytest
+
+import clsolid
+from clsolid.cli import EXIT_MEMORY, main
+from clsolid.core.hostmemory import BYTES_PER_VOXEL, ENV, available_bytes, check_host_memory, parse_bytes
+from clsolid.errors import HostMemoryError, InputError
+
+
+@pytest.mark.parametrize("text, want", [("1024", 1024), ("64G", 64 * 2**30), ("1.5M", int(1.5 * 2**20)),
+                                        ("2GiB", 2 * 2**30), (" 3k ", 3072), ("1T", 2**40)])
+def test_sizes_are_read_with_binary_suffixes(text, want):
+    assert parse_bytes(text) == want
+
+
+@pytest.mark.parametrize("text", ["", "lots", "-5G", "nanG", "G"])
+def test_a_bad_size_is_refused_naming_the_variable(text):
+    with pytest.raises(InputError, match=ENV):
+        parse_bytes(text)
+
+
+def test_the_system_figure_is_known_here(monkeypatch):
+    monkeypatch.delenv(ENV, raising=False)
+    have = available_bytes()
+    assert have is not None and have > 2**26  # this Linux machine reports MemAvailable
+
+
+def test_a_block_over_the_available_memory_is_refused_with_what_to_do(monkeypatch):
+    monkeypatch.setenv(ENV, "1G")
+    check_host_memory((256, 256, 256), "ml")  # 1 GiB at 64 bytes a voxel: fits exactly
+    with pytest.raises(HostMemoryError) as info:
+        check_host_memory((256, 256, 257), "ml")
+    msg = str(info.value)
+    assert "256x256x257" in msg and "1.0 GiB" in msg and "smaller block" in msg and ENV in msg
+    assert isinstance(info.value, MemoryError)
+    again = pickle.loads(pickle.dumps(info.value))  # it crosses processes (Dask) whole
+    assert str(again) == msg
+    with pytest.raises(HostMemoryError):  # the search methods keep more a voxel
+        check_host_memory((170, 170, 170), "search")  # 1.1 GiB at 240 bytes
+    assert BYTES_PER_VOXEL["search"] > BYTES_PER_VOXEL["ml"]
+
+
+@pytest.mark.parametrize("method", ["ml", "kopf"])
+def test_synthesize_refuses_before_growing_anything(monkeypatch, method):
+    monkeypatch.setenv(ENV, "1M")
+    with pytest.raises(HostMemoryError, match="64x64x64"):
+        clsolid.synthesize("brick", (64, 64, 64), method=method, device="reference", rng=1)
+
+
+def test_the_command_line_exits_with_the_memory_code(monkeypatch, tmp_path, capsys):
+    monkeypatch.setenv(ENV, "1M")
+    out = tmp_path / "v.npy"
+    assert main(["synth", "brick", "-o", str(out), "--shape", "64", "64", "64", "--device", "reference"]) == EXIT_MEMORY
+    assert "host memory" in capsys.readouterr().err and not out.exists()
