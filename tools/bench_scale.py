@@ -17,12 +17,17 @@ and the table adds its time and whether its volume is the one-process tiled run'
     python tools/bench_scale.py --cases 256:256 --likelihoods pruned --budget 1800
     python tools/bench_scale.py --cases 50:64 --names porous50 --likelihoods pruned --tile 32
     python tools/bench_scale.py --cases 50:64 --names porous50 --likelihoods pruned --tile 32 --workers 2
+    python tools/bench_scale.py --cases 64:512 --names porous50 --likelihoods pruned --tile 256 --tiled-only
+
+``--tiled-only`` runs each case in tiles alone (for blocks whose one-piece run would take
+as long again, or not fit the device); the table then shows the tiled run's figures.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import sys
 import time
 
 import numpy as np
@@ -37,7 +42,7 @@ class _Stop(Exception):
 
 
 def run(image: np.ndarray, side: int, likelihood: str, budget: float, device, tile: int | None = None,
-        client=None) -> dict:
+        client=None, verbose: bool = False) -> dict:
     """Grow a *side*^3 cube (in tiles of *tile*, if given, on the workers of a Dask *client*, if
     given); return the volume (None if stopped), the time, sweeps and finest-scale cost per voxel visit."""
     sweeps: list = []
@@ -47,6 +52,9 @@ def run(image: np.ndarray, side: int, likelihood: str, budget: float, device, ti
         last = sweeps[-1]["elapsed"] if sweeps else 0.0
         sweeps.append({"scale": info.scale, "n_scales": info.n_scales, "visited": info.visited,
                        "elapsed": info.elapsed, "seconds": info.elapsed - last})
+        if verbose:
+            print(f"  scale {info.scale}/{info.n_scales} sweep {info.sweep}: {info.elapsed - last:.1f} s, "
+                  f"{info.visited} visits, {info.elapsed:.0f} s in all, ETA {info.eta:.0f} s", file=sys.stderr, flush=True)
         if time.perf_counter() - t0 > budget:
             raise _Stop
 
@@ -74,11 +82,16 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--device", default=None)
     ap.add_argument("--tile", type=int, default=None, metavar="N",
                     help="also run every case in tiles of N voxels a side, and compare the volumes")
+    ap.add_argument("--verbose", action="store_true", help="print every sweep (to stderr) as it ends")
+    ap.add_argument("--tiled-only", action="store_true",
+                    help="with --tile: run each case in tiles only, not also in one piece")
     ap.add_argument("--workers", type=int, default=None, metavar="N",
                     help="with --tile: also run every case's tiles on a Dask LocalCluster of N worker processes")
     args = ap.parse_args(argv)
     if args.workers is not None and args.tile is None:
         ap.error("--workers needs --tile")
+    if args.tiled_only and (args.tile is None or args.workers is not None):
+        ap.error("--tiled-only needs --tile, and runs no Dask workers")
     with contextlib.ExitStack() as stack:
         client = None
         if args.workers is not None:
@@ -103,7 +116,7 @@ def table(args, client) -> None:
     """Run every case (in tiles, on the *client*'s workers, as asked) and print the table."""
     device = clsolid.select_device(args.device)
     print(f"{device.name}; matmul reference {matmul_gflops():.1f} GFLOP/s (float32, NumPy, this run)")
-    tiled = "" if args.tile is None else f" tiles of {args.tile}: time (s) | same volume |"
+    tiled = "" if args.tile is None or args.tiled_only else f" tiles of {args.tile}: time (s) | same volume |"
     if client is not None:
         tiled += f" the tiles on {args.workers} Dask workers: time (s) | same volume as tiled |"
     print(f"| exemplar | case | likelihood | time (s) | sweeps (finest) | finest scale, us per voxel visit |{tiled}")
@@ -113,7 +126,12 @@ def table(args, client) -> None:
         for name in args.names:
             image = gallery_exemplar(name, ex_side)
             for likelihood in args.likelihoods:
-                r = run(image, cube, likelihood, args.budget, device)
+                if args.tiled_only:
+                    r = run(image, cube, likelihood, args.budget, device, args.tile, verbose=args.verbose)
+                    print(f"| {name} | {ex_side}² → {cube}³, tiles of {args.tile} | {likelihood} | {seconds(r)} | "
+                          f"{r['sweeps']} ({r['finest_sweeps']}) | {r['per_visit_us']:.1f} |", flush=True)
+                    continue
+                r = run(image, cube, likelihood, args.budget, device, verbose=args.verbose)
                 row = (f"| {name} | {ex_side}² → {cube}³ | {likelihood} | {seconds(r)} | "
                        f"{r['sweeps']} ({r['finest_sweeps']}) | {r['per_visit_us']:.1f} |")
                 if args.tile is not None:
