@@ -12,7 +12,6 @@ import numpy as np
 
 from .balance import project_bias, score_rows, score_stride, softmax, sweep_target
 from .forecast import forecast_visits
-from ..errors import InputError
 from ..exemplar import nearest_level_index
 from .model import ScaleModel, build_scale, check_exemplar_fits
 from .params import DEPTH_AXIS, MLParams
