@@ -23,11 +23,12 @@ reference the kernel is tested against, and the path of the float64 matcher).
 
 from __future__ import annotations
 
-import numpy as np
-
 from typing import Any
 
+import numpy as np
+
 from ..core.views import VIEW_AXES
+from ..errors import DeviceMemoryError
 from .features import square_voxels, voxel_features
 from .match import LOCAL, CLMatcher, square_offsets
 
@@ -144,6 +145,8 @@ class DeviceSearch:
         self.coh, self.matcher = coh, matcher
         ctx, mf = matcher.device.context, cl.mem_flags
         n_voxels = coh.matched.shape[1]
+        if 4 * n_voxels > matcher.device.max_alloc:  # the block and each view's matches, float32 / int32
+            raise DeviceMemoryError("coherence block", 4 * n_voxels, matcher.device.max_alloc)
 
         def table(a: np.ndarray):
             return cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a, np.int32))
@@ -180,6 +183,8 @@ class DeviceSearch:
 
     def best(self, i: int, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None, k: int,
              weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`Coherence.best` for *voxels* (a conflict-free set) of the block *vol*,
+        *coarse* its parent level, *k* the square's side. Returns ``(site (m,), distance (m,))``."""
         import pyopencl as cl
 
         coh, matcher, queue = self.coh, self.matcher, self.matcher.device.queue
