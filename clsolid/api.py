@@ -19,7 +19,7 @@ METHODS = ("ml", "wl", "kopf", "chen-wang")
 OUTPUTS = ("values", "labels")
 #: Options of the search methods (clsolid.search.params.SearchParams).
 _SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order", "causal", "histogram", "candidates",
-                   "specify", "search", "balance")
+                   "specify", "search", "balance", "insert_spacing")
 #: Options of the search methods that are not parameters of the method (what to report).
 _SEARCH_REPORTS = ("site_map",)
 #: The neighbourhood side each method uses when none is given (ML: the thesis case; WL: ch5_np_common).

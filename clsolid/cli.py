@@ -113,7 +113,8 @@ def _add_synth(sub) -> None:
                    help="voxels from the coarser scale: re-synthesised with t=0, or fixed (default %(default)s)")
     p.add_argument("--insert-spacing", type=float, default=d.insert_spacing,
                    help="+in: an exemplar slice, trusted, about every this many voxels of each constrained "
-                        "view's depth (default %(default)s)")
+                        "view's depth (default %(default)s); the search methods' anchor slices (kopf: 6 by "
+                        "default; wl, chen-wang: none unless given; 0 = none)")
     p.add_argument("--insert-slices", type=int, default=d.insert_slices,
                    help="+in: this many slices per constrained view instead of --insert-spacing; 0 = noise only (-in)")
     p.add_argument("--slice-layout", choices=SLICE_LAYOUTS, default=d.slice_layout,
@@ -309,8 +310,9 @@ def _check_resume_flags(args) -> None:
 
 def _check_method_flags(args) -> None:
     """Refuse a flag the chosen method would not read (set away from its default)."""
-    # kopf balances its phases too; the search parameters say which method has no balance
-    flags = _given(args, _WL_ONLY if args.method == "ml" else tuple(n for n in _ML_ONLY if n != "balance"))
+    # kopf balances its phases and anchors slices too; the search parameters say which method does not
+    shared = ("balance", "insert_spacing")
+    flags = _given(args, _WL_ONLY if args.method == "ml" else tuple(n for n in _ML_ONLY if n not in shared))
     if flags:
         raise InputError(f"{flags} not used by --method {args.method}")
 
@@ -352,7 +354,7 @@ def _dask_client(args):
 def cmd_synth(args) -> int:
     from .api import resume, synthesize
     from .preview import save_preview, save_site_map
-    from .ml.driver import preview_depths
+    from .core.slices import preview_depths
     from .volumeio import save_volume
 
     suffix = args.output.suffix.lower()
@@ -375,8 +377,9 @@ def cmd_synth(args) -> int:
                        init=args.init, rule=args.rule, order=args.order, causal=args.causal,
                        histogram=args.histogram, candidates=args.candidates, search=args.search,
                        specify=args.specify, builtin_size=args.builtin_size)
-        if args.method == "kopf" or args.balance != SYNTH_DEFAULTS["balance"]:
-            options["balance"] = args.balance
+        for name in ("balance", "insert_spacing"):  # kopf's defaults are the flags' (ml's); the others' are off
+            if args.method == "kopf" or getattr(args, name) != SYNTH_DEFAULTS[name]:
+                options[name] = getattr(args, name)
         if args.site_map is not None:
             if args.site_map.suffix.lower() != ".png":
                 raise InputError(f"--site-map {args.site_map} must end in .png")

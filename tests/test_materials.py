@@ -124,21 +124,22 @@ def test_issue_10_targets_at_48(gallery_runs, name, target):
 # Issue 11 asks kopf for phase fractions within 2 points, histogram <= 0.05, patch and
 # autocorrelation <= 0.3 in both constrained views, mirror <= 0.1. Measured with
 # tools/gallery.py --method kopf (and --set search='"coherence"'), seed 1, 64^2 -> 48^3, with kopf's
-# defaults (the histogram specified after every pass and the phases balanced: specify=True, balance=1).
+# defaults (the histogram specified after every pass, the phases balanced and anchor slices at the
+# coarse levels: specify=True, balance=1, insert_spacing=6).
 KOPF_LIMITS = {**LIMITS, "phase": ("phase_error_pp", 2.0), "histogram": ("histogram_kl", 0.05)}
 KOPF_TARGETS = {  # (exemplar, target, search): None if met, else why not
     ("composite3", "phase", "exact"): None, ("composite3", "phase", "coherence"): None,
     ("composite3", "histogram", "exact"): None, ("composite3", "histogram", "coherence"): None,
     ("composite3", "patch", "exact"): None, ("composite3", "patch", "coherence"): None,
     ("composite3", "autocorrelation", "exact"): None, ("composite3", "autocorrelation", "coherence"): None,
-    ("composite3", "mirror", "exact"): None, ("composite3", "mirror", "coherence"): "0.11",
+    ("composite3", "mirror", "exact"): None, ("composite3", "mirror", "coherence"): None,
     ("fibres", "phase", "exact"): None, ("fibres", "phase", "coherence"): None,
     ("fibres", "patch", "exact"): None, ("fibres", "patch", "coherence"): None,
-    ("fibres", "autocorrelation", "exact"): "0.33-0.35", ("fibres", "autocorrelation", "coherence"): None,
+    ("fibres", "autocorrelation", "exact"): "0.51-0.60", ("fibres", "autocorrelation", "coherence"): None,
     ("fibres", "mirror", "exact"): None, ("fibres", "mirror", "coherence"): None,
     ("gravel", "histogram", "exact"): None, ("gravel", "histogram", "coherence"): None,
     ("gravel", "patch", "exact"): None, ("gravel", "patch", "coherence"): None,
-    ("gravel", "autocorrelation", "exact"): None, ("gravel", "autocorrelation", "coherence"): "0.24-0.37",
+    ("gravel", "autocorrelation", "exact"): None, ("gravel", "autocorrelation", "coherence"): "0.28-0.34",
     ("gravel", "mirror", "exact"): None, ("gravel", "mirror", "coherence"): None,
 }
 

@@ -7,7 +7,7 @@ from PIL import Image
 from clsolid.errors import InputError
 from clsolid.ml.params import MLParams
 from clsolid.preview import PREVIEW_MIN_SIDE, render_preview, save_preview
-from clsolid.ml.driver import far_depth, inserted_depths, preview_depths
+from clsolid.core.slices import far_depth, inserted_depths, preview_depths
 
 
 def _panel(preview, i):

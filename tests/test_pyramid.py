@@ -8,7 +8,8 @@ from clsolid.errors import InputError
 from clsolid.ml.model import build_scale, scale_exemplar
 from clsolid.ml.params import MLParams
 from clsolid.ml.reference import ReferenceBackend
-from clsolid.ml.driver import inserted_depths, run_ml, slice_depths
+from clsolid.core.slices import inserted_depths, slice_depths
+from clsolid.ml.driver import run_ml
 
 
 def _binomial_reference(labels: np.ndarray, level: int) -> np.ndarray:

@@ -23,7 +23,7 @@ import clsolid
 from clsolid.ml.opencl import CLBackend
 from clsolid.exemplar import builtin_exemplar, quantise
 from clsolid.ml.model import build_scale
-from clsolid.ml.driver import inserted_depths
+from clsolid.core.slices import inserted_depths
 from clsolid.ml.params import DEFAULT_BANDWIDTH_FACTOR, MLParams
 
 CASES = {"a": ("thesis case, 9x9", 9), "b": ("7x7 variant", 7)}

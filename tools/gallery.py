@@ -22,6 +22,7 @@ import json
 import sys
 import time
 from pathlib import Path
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -33,10 +34,11 @@ from clsolid.exemplar import nearest_level_index
 from clsolid.gallery import SIZES, gallery_exemplar, gallery_info, gallery_names
 from clsolid.metrics._common import jsonable
 from clsolid.metrics.symmetry import AXIS_PAIRS
-from clsolid.core.views import DEPTH_AXIS, VIEW_SETS
+from clsolid.core.views import VIEW_SETS
 from clsolid.ml.params import MLParams
+from clsolid.search.params import SearchParams
 from clsolid.preview import render_preview
-from clsolid.ml.driver import inserted_depths, preview_depths
+from clsolid.core.slices import inserted_depths, preview_depths
 from quality_ml import parse_setting  # beside this script (tools/ is on the path when it runs)
 
 VIEWS = metrics.VIEWS
@@ -81,11 +83,19 @@ def copy_chance(exemplar: np.ndarray, side: int) -> float:
     return float(metrics.match_counts(window, exemplar[:half]).max() / window[0].size)
 
 
+def method_params(res: Any) -> MLParams | SearchParams:
+    """A result's parameters, as its method's parameter class (both say where its ``+in``
+    or anchor slices are: clsolid.core.slices)."""
+    if res.params["method"] == "ml":
+        return MLParams.from_dict(res.params)
+    names = {f.name for f in dataclasses.fields(SearchParams)}
+    return SearchParams(**{k: v for k, v in res.params.items() if k in names})
+
+
 def inserted(res: Any) -> dict[str, np.ndarray]:
-    """Depths of the ``+in`` slices of every view of a result (none for an unconstrained view)."""
-    if res.params["method"] != "ml":  # only the likelihood method inserts exemplar slices
-        return {view: np.zeros(0, int) for view in VIEWS}
-    depths = inserted_depths(res.labels.shape, MLParams.from_dict(res.params))
+    """Depths of the ``+in`` (or anchor) slices of every view of a result (none for an
+    unconstrained view)."""
+    depths = inserted_depths(res.volume.shape, method_params(res))
     return {view: depths.get(view, np.zeros(0, int)) for view in VIEWS}
 
 
@@ -224,15 +234,15 @@ def montage(path: Path, rows: list[np.ndarray]) -> None:
 
 
 def montage_row(name: str, res: Any) -> np.ndarray:
-    """The exemplar beside a front, right and top slice, each away from the ``+in`` slices."""
+    """The exemplar beside a front, right and top slice, each away from the ``+in`` (or
+    anchor) slices."""
+    params = method_params(res)
+    depths = preview_depths(res.volume.shape, params)
     if res.params["method"] == "ml":
-        params = MLParams.from_dict(res.params)
-        return render_preview(res.exemplar_labels, res.labels, depths=preview_depths(res.labels.shape, params),
-                              constrained=params.view_names, name=name, min_side=PANEL_MIN).image
-    # a search method: no +in slices to avoid, so the middle of each axis, in values
-    depths = {v: res.volume.shape[a] // 2 for v, a in DEPTH_AXIS.items()}
-    return render_preview(res.exemplar, res.volume, depths=depths, constrained=VIEW_SETS[res.params["views"]],
-                          name=name, min_side=PANEL_MIN).image
+        return render_preview(res.exemplar_labels, res.labels, depths=depths, constrained=params.view_names,
+                              name=name, min_side=PANEL_MIN).image
+    return render_preview(res.exemplar, res.volume, depths=depths, constrained=params.view_names,
+                          name=name, min_side=PANEL_MIN).image  # a search method's volume holds values
 
 
 # ----------------------------------------------------------------------------- main

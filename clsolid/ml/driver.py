@@ -14,99 +14,13 @@ from .balance import project_bias, score_rows, score_stride, softmax, sweep_targ
 from .forecast import forecast_visits
 from ..exemplar import nearest_level_index
 from .model import ScaleModel, build_scale, check_exemplar_fits
-from .params import DEPTH_AXIS, MLParams
+from .params import MLParams
 from ..core.philox import relax_tag
 from ..core.schedule import set_order, split_by_colour
+from ..core.slices import insert_slices
 from ..core.synthesis import SweepInfo, SynthesisResult, check_shape, resolve_seed  # noqa: F401 (re-exported)
 
 log = logging.getLogger(__name__)
-
-
-def slice_depths(size: int, count: int, step: int, offset: float = 0.0) -> np.ndarray:
-    """*count* evenly spaced depths on multiples of *step* (so they survive decimation).
-
-    *offset* shifts them by that fraction of their spacing (wrapping around).
-    """
-    slots = max(1, -(-size // step))
-    spaced = np.linspace(0, slots, count, endpoint=False) + offset * slots / count
-    return np.unique(spaced.astype(int) % slots) * step
-
-
-def _view_offset(params: MLParams, view: str) -> float:
-    """Where a view's ``+in`` slices sit between the front view's: staggered, view i of n at i/n."""
-    return params.view_names.index(view) / params.views if params.slice_layout == "staggered" else 0.0
-
-
-def slice_count(size: int, params: MLParams) -> int:
-    """How many ``+in`` slices a view gets along a depth axis of *size* voxels (full resolution)."""
-    if params.insert_slices is not None:
-        return params.insert_slices
-    return max(1, round(size / params.insert_spacing))
-
-
-def inserted_depths(shape: tuple[int, int, int], params: MLParams) -> dict[str, np.ndarray]:
-    """Full-resolution depths of the ``+in`` slices of each constrained view (front: z, right: x, top: y)."""
-    step = 2 ** (params.scales - 1)
-    out = {}
-    for view in params.view_names:
-        size = shape[DEPTH_AXIS[view]]
-        count = slice_count(size, params)
-        out[view] = slice_depths(size, count, step, _view_offset(params, view)) if count else np.empty(0, int)
-    return out
-
-
-def far_depth(size: int, taken: np.ndarray) -> int:
-    """The depth farthest (on the torus) from every *taken* one; the middle one among equals."""
-    d = np.arange(size)
-    if taken.size == 0:
-        return size // 2
-    gap = np.abs(d[:, None] - taken[None, :])
-    dist = np.minimum(gap, size - gap).min(axis=1)
-    best = np.flatnonzero(dist == dist.max())
-    return int(best[np.argmin(np.abs(best - size // 2))])
-
-
-def preview_depths(shape: tuple[int, int, int], params: MLParams) -> dict[str, int]:
-    """One slice per view to show, away from every ``+in`` slice (which only shows the exemplar)."""
-    taken = inserted_depths(shape, params)
-    return {view: far_depth(shape[a], taken.get(view, np.empty(0, int))) for view, a in DEPTH_AXIS.items()}
-
-
-def insert_slices(vol: np.ndarray, labels_img: np.ndarray, params: MLParams, level: int, seed: int,
-                  full_shape: tuple[int, int, int]) -> np.ndarray:
-    """``+in``: tile the exemplar onto the ``+in`` slices of each constrained view.
-
-    Called at every scale with that scale's exemplar: the depths (:func:`inserted_depths`
-    of the full-resolution *full_shape*) and tile shifts are the full-resolution ones
-    divided by 2^level (all multiples of 2^(scales-1)), so each slice
-    persists from the coarsest scale down. With ``slice_layout="staggered"`` the views'
-    slices sit at different depths and each shows the exemplar shifted by its own seeded
-    offset, so that nothing maps the x axis onto z. Returns the mask of inserted voxels;
-    they start each scale trusted (t = 0), like inherited voxels: under ICM a voxel at
-    t = 1 ignores its neighbours, so untrusted slices would be overwritten unseen.
-    """
-    mask = np.zeros(vol.shape, bool)
-    step = 2 ** (params.scales - 1 - level)
-    shift_rng = np.random.default_rng([seed, 0x1A5E])  # the same draws at every scale
-    ex_slots = [-(-n // step) for n in labels_img.shape]
-
-    def tiled(rows: int, cols: int) -> np.ndarray:
-        shift = [0, 0]
-        if params.slice_layout == "staggered":
-            shift = [int(shift_rng.integers(0, n)) * step for n in ex_slots]
-        reps = (-(-(rows + shift[0]) // labels_img.shape[0]), -(-(cols + shift[1]) // labels_img.shape[1]))
-        return np.tile(labels_img, reps)[shift[0]: shift[0] + rows, shift[1]: shift[1] + cols]
-
-    Z, Y, X = vol.shape
-    for view, full_depths in inserted_depths(full_shape, params).items():
-        for d in full_depths // 2**level:
-            if view == "front":
-                vol[d], mask[d] = tiled(Y, X), True
-            elif view == "right":
-                vol[:, :, d], mask[:, :, d] = tiled(Y, Z).T, True
-            else:
-                vol[:, d, :], mask[:, d, :] = tiled(Z, X), True
-    return mask
 
 
 def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, params: MLParams, seed: int = 0):

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..core.orders import visiting_order
 from ..core.schedule import colour_sets, set_order, split_by_colour
+from ..core.slices import insert_slices
 from ..core.synthesis import SweepInfo
 from ..errors import InputError
 from . import chenwang, coherence, kopf, wl
@@ -91,6 +92,7 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
         use_parent = parent_img is not None
         parent_shape = None if parent_img is None else parent_img.shape
         vol = _start(pyr[level], shapes[level], coarse, params.init, seed, level)
+        anchors = _anchor(params, vol, pyr[level], level, seed, shape)
         ctx = _level(params, pyr, level, parent_shape, table, centres, vol, make_matcher(table), coh)
         coh = ctx.coherence
         update = UPDATES[params.method]
@@ -110,6 +112,8 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
                     searches += update(ctx, vol, parent, sets[c])
             if params.specify and ctx.values.size > kopf.MAX_PHASES:
                 _specify(ctx, vol, pyr[level])
+            if anchors is not None:
+                _rewrite(ctx, vol, *anchors)
             if progress is not None:
                 now = time.perf_counter()
                 progress(_report(params, level, it, shapes[level], now - t_iter, now - t0, pyr[level], vol))
@@ -155,6 +159,34 @@ def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape
         if coarser is not None:
             ctx.coherence.inherit(coarser)
     return ctx
+
+
+def _anchor(params: SearchParams, vol: np.ndarray, exemplar: np.ndarray, level: int, seed: int,
+            shape: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray] | None:
+    """Write a level's anchor slices (``insert_spacing``; :func:`clsolid.core.slices.insert_slices`)
+    into its starting block *vol*. Returns ``(voxels, values)`` to write again after every
+    pass; None at the finest level, whose slice voxels start from noise drawn from its
+    exemplar's pixels (kept, they would come out as copies of the exemplar), or without
+    anchors."""
+    if not params.insert_spacing:
+        return None
+    mask = insert_slices(vol, exemplar, params, level, seed, shape)
+    if level > 0:
+        voxels = np.flatnonzero(mask)
+        return voxels, vol.ravel()[voxels]
+    # the coarser slice came up-sampled onto depth d + 1 as well: both start from noise
+    mask |= np.roll(mask, 1, axis=0) | np.roll(mask, 1, axis=1) | np.roll(mask, 1, axis=2)
+    voxels = np.flatnonzero(mask)
+    np.put(vol, voxels, np.random.default_rng([seed, level, 0xA9C4]).choice(exemplar.ravel(), size=voxels.size))
+    return None
+
+
+def _rewrite(ctx: Level, vol: np.ndarray, voxels: np.ndarray, values: np.ndarray) -> None:
+    """Give the anchor *voxels* their *values* again (in place), and tell kopf's histogram."""
+    old = vol.ravel()[voxels]
+    np.put(vol, voxels, values)
+    if ctx.histogram is not None:
+        ctx.histogram.replace(old, values, voxels)
 
 
 def _specify(ctx: Level, vol: np.ndarray, exemplar: np.ndarray) -> None:

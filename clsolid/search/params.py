@@ -29,6 +29,10 @@ HISTOGRAMS = ("global", "slice")
 SEARCHES = ("exact", "coherence")
 #: chen-wang's candidate set size (thesis §5.2.1, §6.3.3).
 DEFAULT_CANDIDATES = 15
+#: kopf's anchor slices: one about every 6 voxels of each constrained view's depth, as the
+#: likelihood method's +in slices (on the gallery it lifts kopf's mirror correlations <= 0.1
+#: from 10 to 12 of 15 and its autocorrelations <= 0.3 from 3 to 7 of 13; README, Choices).
+DEFAULT_INSERT_SPACING = 6.0
 
 
 @dataclass(frozen=True)
@@ -108,6 +112,14 @@ class SearchParams:
     candidates : int
         ``chen-wang`` only: the size of each exemplar site's candidate set, the site itself
         included (the thesis's k; tested with 1, 5, 15, 25; default 15).
+    insert_spacing : float or None
+        Anchor slices (a departure; README, Choices): about every ``insert_spacing`` voxels
+        of each constrained view's depth, an exemplar slice at a seeded shift, the views'
+        slices staggered (:mod:`clsolid.core.slices`, the likelihood method's ``+in``),
+        written into every level but the finest and written again after every pass there,
+        so that the coarse levels cannot settle into a block that is its own x<->z mirror
+        image; the finest level starts those voxels from noise. 0: none (the thesis). None
+        (default): 6 for ``kopf``, 0 for the others.
     """
 
     method: str = "wl"
@@ -126,6 +138,11 @@ class SearchParams:
     search: str = "exact"
     specify: bool | None = None
     balance: float | None = None
+    insert_spacing: float | None = None
+
+    #: The anchor slices' layout and count (read by :mod:`clsolid.core.slices`): always
+    #: staggered, their number set by ``insert_spacing``.
+    slice_layout = "staggered"
 
     def __post_init__(self) -> None:
         one_of("method", self.method, METHODS)
@@ -171,12 +188,24 @@ class SearchParams:
             raise InputError(f"balance={self.balance!r} is kopf's (and the likelihood method's); method "
                              f"{self.method!r} has none")
         object.__setattr__(self, "balance", float(self.balance))
+        if self.insert_spacing is None:
+            object.__setattr__(self, "insert_spacing", DEFAULT_INSERT_SPACING if self.method == "kopf" else 0.0)
+        if (isinstance(self.insert_spacing, bool) or not isinstance(self.insert_spacing, (int, float))
+                or not (self.insert_spacing == 0 or 1 <= self.insert_spacing < float("inf"))):
+            raise InputError(f"insert_spacing={self.insert_spacing!r} must be 0 (no anchor slices) or a number "
+                             ">= 1 (voxels between a view's anchor slices)")
+        object.__setattr__(self, "insert_spacing", float(self.insert_spacing))
         if not isinstance(self.parent, bool):
             raise InputError(f"parent={self.parent!r} must be True or False")
 
     @property
     def view_names(self) -> tuple[str, ...]:
         return VIEW_SETS[self.views]
+
+    @property
+    def insert_slices(self) -> int | None:
+        """Anchor slices a view gets: none with ``insert_spacing=0``, else as the spacing says (None)."""
+        return 0 if self.insert_spacing == 0 else None
 
     def to_dict(self) -> dict:
         return asdict(self)
