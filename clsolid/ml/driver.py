@@ -11,7 +11,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .balance import project_bias, score_rows, score_stride, softmax, sweep_target
-from .forecast import forecast_visits
+from .forecast import affordable, forecast_visits
 from ..exemplar import nearest_level_index
 from .model import ScaleModel, build_scale, check_exemplar_fits
 from .params import MLParams
@@ -96,7 +96,8 @@ class _Clock:
     Within a scale the sweeps still to come and the voxels each visits are known in
     advance under ICM and Gibbs (:func:`~clsolid.ml.forecast.forecast_visits`), so the
     time left there is those visits at the last sweep's rate per visit; otherwise
-    (annealing) it is extrapolated from the fall of the global temperature. The scales
+    (annealing, or a scale too large to replay: :func:`~clsolid.ml.forecast.affordable`) it
+    is extrapolated from the fall of the global temperature. The scales
     still to come are estimated from their size.
     """
 
@@ -257,9 +258,9 @@ def run_ml(
                       "temperatures": [], "visited": [], "sweep_seconds": []}
         backend.start_scale(model, vol, temp, params, sources=sources)
         balance = Balance(model, params.balance, vol, bias) if params.balance else None
-        if progress is not None and not annealing:  # the ETA's sweeps, known before they run
+        if progress is not None and not annealing:  # the ETA's sweeps, known before they run where affordable
             clock.plan(first, forecast_visits(model, temp, inherited, resynth, params.xi, seed, first, n_sweeps,
-                                              None if params.sweeps else target))
+                                              None if params.sweeps else target) if affordable(model) else [])
         for sweep in range(first, n_sweeps + 1):
             t_sweep = time.perf_counter()
             if annealing:

@@ -6,7 +6,12 @@ voxels a sweep visits and in what order follow from the temperatures, the truste
 and the seed alone. So the whole temperature trajectory of a scale can be replayed
 without a single likelihood: the same conflict-free sets, in the same seeded order, with
 the float64 reference's temperature update. The replay costs one neighbourhood sum per
-voxel and sweep, against the run's sum over every exemplar site.
+voxel and sweep, against the run's sum over every exemplar site; but it runs in NumPy, on
+one core, and the pruned sum is cheap: at 512^3 with 9 x 9 views (153 neighbours) the
+finest scale's replay ran for more than 35 minutes before its first sweep (measured with
+``tools/bench_scale.py --cases 64:512``). So a scale whose sweep would sum more than
+:data:`REPLAY_TERMS` neighbour terms is not replayed (:func:`affordable`), and its ETA comes
+from the fall of the global temperature instead.
 """
 
 from __future__ import annotations
@@ -16,6 +21,15 @@ import numpy as np
 from ..core.schedule import set_order, split_by_colour
 from .model import ScaleModel
 from .reference import new_temperature
+
+#: Most neighbour terms (voxels x neighbours in the union of the views) a replayed sweep may
+#: sum: 2^30, a 9 x 9 run up to about 190^3 (at 128^3, 3.2e8 terms: a few seconds a sweep).
+REPLAY_TERMS = 2**30
+
+
+def affordable(model: ScaleModel) -> bool:
+    """Whether a scale's sweeps are cheap enough to replay (:data:`REPLAY_TERMS`)."""
+    return int(np.prod(model.shape)) * int(model.union_offsets.shape[0]) <= REPLAY_TERMS
 
 
 def forecast_visits(model: ScaleModel, temp: np.ndarray, inherited: np.ndarray, resynth: bool, xi: float,
