@@ -30,17 +30,18 @@ def test_the_system_figure_is_known_here(monkeypatch):
 
 
 def test_a_block_over_the_available_memory_is_refused_with_what_to_do(monkeypatch):
-    monkeypatch.setenv(ENV, "1G")
-    check_host_memory((256, 256, 256), "ml")  # 1 GiB at 64 bytes a voxel: fits exactly
+    side = 128
+    monkeypatch.setenv(ENV, str(side**3 * BYTES_PER_VOXEL["ml"]))
+    check_host_memory((side, side, side), "ml")  # fits exactly
     with pytest.raises(HostMemoryError) as info:
-        check_host_memory((256, 256, 257), "ml")
+        check_host_memory((side, side, side + 1), "ml")
     msg = str(info.value)
-    assert "256x256x257" in msg and "1.0 GiB" in msg and "smaller block" in msg and ENV in msg
+    assert f"{side}x{side}x{side + 1}" in msg and "GiB" in msg and "smaller block" in msg and ENV in msg
     assert isinstance(info.value, MemoryError)
     again = pickle.loads(pickle.dumps(info.value))  # it crosses processes (Dask) whole
     assert str(again) == msg
     with pytest.raises(HostMemoryError):  # the search methods keep more a voxel
-        check_host_memory((170, 170, 170), "search")  # 1.1 GiB at 240 bytes
+        check_host_memory((side, side, side), "search")
     assert BYTES_PER_VOXEL["search"] > BYTES_PER_VOXEL["ml"]
 
 

@@ -14,11 +14,13 @@ import numpy as np
 
 from ..errors import HostMemoryError, InputError
 
-#: Host bytes a voxel of the full-resolution block costs at a run's peak, with about 50 %
-#: to spare over what was measured (the growth of peak RSS from 64^3 to 128^3, porous50,
-#: Intel's CPU runtime, whose device buffers are host memory): the likelihood method 43
-#: bytes, ``kopf`` with the coherence search 128, ``chen-wang`` 157.
-BYTES_PER_VOXEL = {"ml": 64, "search": 240}
+#: Host bytes a voxel of the full-resolution block costs at a run's peak, with about 30 %
+#: to spare over what was measured on porous50 with Intel's CPU runtime (whose device
+#: buffers are host memory): the likelihood method 43 bytes in one piece (the growth of
+#: peak RSS from 64^3 to 128^3) and 86 in tiles (512^3 in tiles of 256: 11.8 GB); the
+#: search methods, from 64^3 to 128^3: ``kopf`` with the coherence search 128,
+#: ``chen-wang`` 157 (their estimate keeps 50 %).
+BYTES_PER_VOXEL = {"ml": 112, "search": 240}
 
 #: Environment variable that overrides the memory thought available (bytes, or with a
 #: K, M, G or T suffix): where the system's figure is wrong for a run (swap, a cgroup).
