@@ -1,5 +1,7 @@
 """The scripts in tools/ run (at toy sizes; their figures are not checked here)."""
 
+import pytest
+
 
 def test_bench_ml_runs_with_tuning(capsys, device, tool):
     tool("bench_ml").main(["--case", "b", "--shape", "8", "8", "8", "--voxels-per-item", "2",
@@ -97,3 +99,14 @@ def test_bench_scale_prints_a_row_per_run(capsys, device, tool):
     out = capsys.readouterr().out
     assert "GFLOP/s" in out and "| porous50 | 64² → 8³ | exact |" in out and "| porous50 | 64² → 8³ | pruned |" in out
     assert "tiles of 5" in out and out.count("| yes |") == 2  # a tiled run is the one-piece run
+
+
+def test_bench_scale_runs_tiles_alone_and_says_every_sweep(capsys, device, tool):
+    bench = tool("bench_scale")
+    bench.main(["--cases", "64:8", "--names", "porous50", "--likelihoods", "pruned", "--tile", "5", "--tiled-only",
+                "--verbose", "--device", device.device.name.strip()[:8]])
+    captured = capsys.readouterr()
+    assert "| porous50 | 64² → 8³, tiles of 5 | pruned |" in captured.out and "same volume" not in captured.out
+    assert "scale 1/" in captured.err and "visits" in captured.err
+    with pytest.raises(SystemExit):
+        bench.main(["--tiled-only"])  # needs --tile
