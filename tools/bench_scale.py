@@ -126,15 +126,12 @@ def table(args, client) -> None:
         for name in args.names:
             image = gallery_exemplar(name, ex_side)
             for likelihood in args.likelihoods:
-                if args.tiled_only:
-                    r = run(image, cube, likelihood, args.budget, device, args.tile, verbose=args.verbose)
-                    print(f"| {name} | {ex_side}² → {cube}³, tiles of {args.tile} | {likelihood} | {seconds(r)} | "
-                          f"{r['sweeps']} ({r['finest_sweeps']}) | {r['per_visit_us']:.1f} |", flush=True)
-                    continue
-                r = run(image, cube, likelihood, args.budget, device, verbose=args.verbose)
-                row = (f"| {name} | {ex_side}² → {cube}³ | {likelihood} | {seconds(r)} | "
+                first = args.tile if args.tiled_only else None  # the run the row's first columns describe
+                case_name = f"{ex_side}² → {cube}³" + (f", tiles of {args.tile}" if args.tiled_only else "")
+                r = run(image, cube, likelihood, args.budget, device, first, verbose=args.verbose)
+                row = (f"| {name} | {case_name} | {likelihood} | {seconds(r)} | "
                        f"{r['sweeps']} ({r['finest_sweeps']}) | {r['per_visit_us']:.1f} |")
-                if args.tile is not None:
+                if args.tile is not None and not args.tiled_only:
                     t = run(image, cube, likelihood, args.budget, device, args.tile)
                     row += f" {seconds(t)} | {same(r, t)} |"
                     if client is not None:

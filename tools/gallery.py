@@ -237,12 +237,10 @@ def montage_row(name: str, res: Any) -> np.ndarray:
     """The exemplar beside a front, right and top slice, each away from the ``+in`` (or
     anchor) slices."""
     params = method_params(res)
-    depths = preview_depths(res.volume.shape, params)
-    if res.params["method"] == "ml":
-        return render_preview(res.exemplar_labels, res.labels, depths=depths, constrained=params.view_names,
-                              name=name, min_side=PANEL_MIN).image
-    return render_preview(res.exemplar, res.volume, depths=depths, constrained=params.view_names,
-                          name=name, min_side=PANEL_MIN).image  # a search method's volume holds values
+    ml = res.params["method"] == "ml"  # a search method's volume holds values, not level indices
+    exemplar, volume = (res.exemplar_labels, res.labels) if ml else (res.exemplar, res.volume)
+    return render_preview(exemplar, volume, depths=preview_depths(volume.shape, params),
+                          constrained=params.view_names, name=name, min_side=PANEL_MIN).image
 
 
 # ----------------------------------------------------------------------------- main

@@ -182,7 +182,8 @@ def _anchor(params: SearchParams, vol: np.ndarray, exemplar: np.ndarray, level: 
 
 
 def _rewrite(ctx: Level, vol: np.ndarray, voxels: np.ndarray, values: np.ndarray) -> None:
-    """Give the anchor *voxels* their *values* again (in place), and tell kopf's histogram."""
+    """Give *voxels* (flat indices) of the block *vol* their *values* (in place), and tell
+    kopf's histogram: the anchor slices after every pass, or the whole specified block."""
     old = vol.ravel()[voxels]
     np.put(vol, voxels, values)
     if ctx.histogram is not None:
@@ -191,10 +192,7 @@ def _rewrite(ctx: Level, vol: np.ndarray, voxels: np.ndarray, values: np.ndarray
 
 def _specify(ctx: Level, vol: np.ndarray, exemplar: np.ndarray) -> None:
     """Give the block (in place) the level exemplar's histogram, and tell kopf's histogram."""
-    old = vol.ravel().copy()
-    vol[...] = specify_histogram(vol, exemplar)
-    if ctx.histogram is not None:
-        ctx.histogram.replace(old, vol.ravel(), np.arange(vol.size))
+    _rewrite(ctx, vol, np.arange(vol.size), specify_histogram(vol, exemplar).ravel())
 
 
 def _start(exemplar: np.ndarray, shape: tuple[int, int, int], coarse: np.ndarray | None, init: str,
