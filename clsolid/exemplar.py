@@ -222,8 +222,10 @@ def _scaled_floor(image: np.ndarray, lo: Any, hi: Any, levels: int) -> np.ndarra
             return shifted * levels // (hi_i - lo_i)
     x = image.astype(np.float64)
     lo_f, hi_f = float(lo), float(hi)
-    # Halving both ends keeps the span finite for extreme float ranges.
-    t = (x / 2 - lo_f / 2) / (hi_f / 2 - lo_f / 2)
+    if np.isfinite(hi_f - lo_f):
+        t = (x - lo_f) / (hi_f - lo_f)
+    else:  # halving both ends keeps an extreme span finite (and is exact there: no subnormals)
+        t = (x / 2 - lo_f / 2) / (hi_f / 2 - lo_f / 2)
     return np.floor(t * levels)
 
 

@@ -339,6 +339,14 @@ def test_quantise_is_monotone_and_in_range(values, levels):
         assert q[np.argmin(img)] == 0 and q[np.argmax(img)] == levels - 1
 
 
+def test_quantise_a_subnormal_span():
+    """A span of one subnormal step: halving it underflowed to 0 and gave 0/0 (found by
+    the property test above); the span is used whole wherever it is finite."""
+    q = quantise(np.array([0.0, 5e-324, 0.0]), 300)
+    np.testing.assert_array_equal(q, [0, 299, 0])
+    np.testing.assert_array_equal(quantise(np.array([-1.7e308, 0.0, 1.7e308]), 4), [0, 2, 3])  # extreme span
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     values=st.lists(st.integers(0, 65535), min_size=2, max_size=60),
