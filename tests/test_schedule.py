@@ -1,9 +1,10 @@
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from clsolid.ml.model import view_offsets
-from clsolid.core.schedule import colour_sets, period, set_order, split_by_colour
+from clsolid.core.schedule import colour_set, colour_sets, period, set_count, set_order
 
 
 def union_offsets(half, views):
@@ -51,11 +52,17 @@ def test_set_order_is_a_seeded_permutation():
     assert not np.array_equal(a, set_order(25, 8, 0, 1))
 
 
-def test_split_by_colour_partitions_active_voxels():
-    colour, n = colour_sets((6, 7, 8), 2)
-    active = np.random.default_rng(0).random((6, 7, 8)) < 0.5
-    sets = split_by_colour(active, colour, n)
+@pytest.mark.parametrize("shape, half", [((6, 7, 8), 2), ((13, 5, 8), 1), ((30, 31, 29), 4), ((1, 9, 9), 3)])
+def test_colour_sets_partition_active_voxels(shape, half):
+    colour, n = colour_sets(shape, half)
+    assert set_count(shape, half) == n
+    active = np.random.default_rng(0).random(shape) < 0.5
+    sets = [colour_set(shape, n, c, active) for c in range(n)]
     allv = np.concatenate(sets)
+    assert allv.tolist() != sorted(allv.tolist()) or n == 1  # grouped by colour, not in flat order
     assert sorted(allv.tolist()) == np.flatnonzero(active).tolist()
     for c, s in enumerate(sets):
         assert (colour.ravel()[s] == c).all()
+        assert (np.diff(s) > 0).all()  # ascending within a set
+        # each set generated from the formula equals a scan of the colour array
+        np.testing.assert_array_equal(colour_set(shape, n, c), np.flatnonzero(colour.ravel() == c))

@@ -15,12 +15,13 @@ import numpy as np
 from ..errors import HostMemoryError, InputError
 
 #: Host bytes a voxel of the full-resolution block costs at a run's peak, with about 30 %
-#: to spare over what was measured on porous50 with Intel's CPU runtime (whose device
-#: buffers are host memory): the likelihood method 43 bytes in one piece (the growth of
-#: peak RSS from 64^3 to 128^3) and 86 in tiles (512^3 in tiles of 256: 11.8 GB); the
-#: search methods, from 64^3 to 128^3: ``kopf`` with the coherence search 128,
-#: ``chen-wang`` 157 (their estimate keeps 50 %).
-BYTES_PER_VOXEL = {"ml": 112, "search": 240}
+#: to spare over what was measured (the growth of peak RSS from 128^3 to 192^3, porous50,
+#: Intel's CPU runtime, whose device buffers are host memory): the likelihood method 36
+#: bytes in one piece and 32 in tiles; the search methods, from 96^3 to 128^3 with the
+#: coherence search, ``kopf`` 50 and ``chen-wang`` 81 (their estimate keeps 50 %).
+#: The drivers hold no whole-block index arrays (each conflict-free set is generated
+#: when it is relaxed, :func:`clsolid.core.schedule.colour_set`).
+BYTES_PER_VOXEL = {"ml": 48, "search": 120}
 
 #: Environment variable that overrides the memory thought available (bytes, or with a
 #: K, M, G or T suffix): where the system's figure is wrong for a run (swap, a cgroup).

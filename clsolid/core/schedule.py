@@ -16,6 +16,8 @@ The result is k^2 sets (25 for a 9x9 window), whatever the number of views.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -31,8 +33,14 @@ def period(shape: tuple[int, ...], half_width: int) -> int:
     return k
 
 
+def set_count(shape: tuple[int, int, int], half_width: int) -> int:
+    """Number of colour sets of a ``(Z, Y, X)`` block: the square of its :func:`period`."""
+    return period(shape, half_width) ** 2
+
+
 def colour_sets(shape: tuple[int, int, int], half_width: int) -> tuple[np.ndarray, int]:
-    """Colour of every voxel of a ``(Z, Y, X)`` block and the number of colours."""
+    """Colour of every voxel of a ``(Z, Y, X)`` block and the number of colours (4 bytes a
+    voxel: the drivers generate each set's voxels with :func:`colour_set` instead)."""
     k = period(shape, half_width)
     z, y, x = np.ogrid[: shape[0], : shape[1], : shape[2]]
     colour = ((y + z) % k) * k + (x + z) % k
@@ -44,11 +52,18 @@ def set_order(n_sets: int, seed: int, scale: int, sweep: int) -> np.ndarray:
     return np.random.default_rng([seed, scale, sweep]).permutation(n_sets)
 
 
-def split_by_colour(active: np.ndarray, colour: np.ndarray, n_sets: int) -> list[np.ndarray]:
-    """Flat indices of the active voxels of each colour, ascending within a set."""
-    idx = np.flatnonzero(active.ravel())
-    col = colour.ravel()[idx]
-    order = np.argsort(col, kind="stable")
-    bounds = np.searchsorted(col[order], np.arange(n_sets + 1))
-    sorted_idx = idx[order]
-    return [sorted_idx[bounds[c] : bounds[c + 1]] for c in range(n_sets)]
+def colour_set(shape: tuple[int, int, int], n_sets: int, c: int, active: np.ndarray | None = None) -> np.ndarray:
+    """Flat indices, ascending, of the voxels of colour *c* (of :func:`colour_sets`' *n_sets*),
+    only the *active* ones if a mask is given.
+
+    Generated from the colour's formula, plane by plane, so that a sweep never holds more
+    than one set's indices: for c = (cy, cx), plane z holds the grid y = cy - z,
+    x = cx - z (mod k)."""
+    k = math.isqrt(n_sets)
+    cy, cx = divmod(int(c), k)
+    depth, rows, cols = shape
+    planes = [((z * rows + np.arange((cy - z) % k, rows, k)[:, None]) * cols
+               + np.arange((cx - z) % k, cols, k)[None, :]).ravel() for z in range(depth)]
+    idx = np.concatenate(planes) if planes else np.empty(0, np.intp)
+    return idx if active is None else idx[np.ravel(active)[idx]]
+

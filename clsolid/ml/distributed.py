@@ -21,7 +21,6 @@ Dask is an optional extra: ``pip install "clsolid[dask]"``.
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import threading
 import uuid
 from typing import Any, Iterable, Iterator
@@ -136,11 +135,6 @@ def device_spec(device) -> str | None:
     raise InputError(f"device={device!r} must be a device spec string, a Device or None for Dask workers")
 
 
-def _portable(model: ScaleModel) -> ScaleModel:
-    """The scale's tables without the whole block's set colours (the host alone schedules sets)."""
-    return dataclasses.replace(model, colour=None)
-
-
 class DaskTiles:
     """Runs the tiles of each set as tasks on the workers of a ``distributed.Client``.
 
@@ -172,7 +166,7 @@ class DaskTiles:
 
     def prepare(self, models: list[ScaleModel], edge: int) -> None:
         """Refuse tiles whose buffers exceed some worker's device (checked there)."""
-        self._on_each(check_task, self.spec, self.options, [_portable(m) for m in models], edge)
+        self._on_each(check_task, self.spec, self.options, models, edge)
 
     def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
         return self.client.submit(init_task, self.spec, self.options, tuple(shape), seed, pixels,
@@ -181,7 +175,7 @@ class DaskTiles:
     def load_scale(self, model: ScaleModel, params: MLParams, block) -> None:
         """Send the scale's tables to every worker (each builds its engine on its first tile)."""
         self.token = f"clsolid-scale-{uuid.uuid4().hex}"
-        [self.tables] = self.client.scatter([(_portable(model), params, tuple(block))], broadcast=True, hash=False)
+        [self.tables] = self.client.scatter([(model, params, tuple(block))], broadcast=True, hash=False)
 
     def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
         self.sweep = (seed, tag, float(t_in), np.array(bias, np.float64))

@@ -6,7 +6,7 @@ import logging
 import math
 import time
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Iterable
 
 import numpy as np
 
@@ -16,7 +16,7 @@ from ..exemplar import nearest_level_index
 from .model import ScaleModel, build_scale, check_exemplar_fits
 from .params import MLParams
 from ..core.philox import relax_tag
-from ..core.schedule import set_order, split_by_colour
+from ..core.schedule import set_order
 from ..core.slices import insert_slices
 from ..core.synthesis import SweepInfo, SynthesisResult, check_shape, resolve_seed  # noqa: F401 (re-exported)
 
@@ -59,6 +59,11 @@ class Balance:
     next one, so the bias follows the volume within a sweep: a bias fitted once per sweep
     lags it (the scores drift as the labels change, and the fractions swing from sweep
     to sweep by several points).
+
+    It keeps each voxel's label index (one byte a voxel up to 256 labels), the whole
+    volume's label counts, and each set's counts for the sweep (:meth:`start_sweep`): a
+    set's labels change only when it is relaxed, so the voxels still to come are counted
+    without listing them.
     """
 
     def __init__(self, model: ScaleModel, beta: float, volume: np.ndarray, bias: np.ndarray) -> None:
@@ -66,23 +71,40 @@ class Balance:
         self.pi = label_fractions(model.exemplar, model.labels)
         self.stride = score_stride(model.shape)
         self.bias = bias  # zeros at a scale's start (a coarser scale's labels mean other grey levels)
-        self.index = nearest_level_index(volume, model.labels)  # each voxel's label, kept up to date
+        self.dtype = np.min_scalar_type(max(model.labels.size - 1, 0))
+        self.index = self._index(volume)  # each voxel's label, kept up to date
+        self.total = self._count(self.index)
+        self.waiting: list[tuple[np.ndarray, int]] = []
 
-    def after(self, backend: Any, updated: np.ndarray, pending: np.ndarray) -> np.ndarray:
-        """The bias for the *pending* voxels, from the scores the *updated* ones left.
+    def _index(self, values: np.ndarray) -> np.ndarray:
+        return nearest_level_index(values, self.model.labels).astype(self.dtype)
 
-        The pending voxels aim at whatever brings the whole volume to the exemplar's
-        fractions, given the labels of all the others.
+    def _count(self, index: np.ndarray) -> np.ndarray:
+        return np.bincount(index, minlength=self.model.labels.size)
+
+    def start_sweep(self, sets: Iterable[np.ndarray]) -> None:
+        """Count the labels of this sweep's *sets*, in the order they will be relaxed."""
+        self.waiting = [(self._count(self.index[s]), s.size) for s in sets]
+
+    def after(self, backend: Any, updated: np.ndarray, k: int) -> np.ndarray:
+        """The bias for the voxels still to come after the sweep's *k*-th set, *updated*.
+
+        Those voxels are the later sets' or, after the last set, all the sweep's voxels
+        again; they aim at whatever brings the whole volume to the exemplar's fractions,
+        given the labels of all the others.
         """
-        labels = self.model.labels
-        self.index[updated] = nearest_level_index(np.asarray(backend.volume()).ravel()[updated], labels)
+        new = self._index(np.asarray(backend.volume()).ravel()[updated])
+        self.total += self._count(new) - self._count(self.index[updated])
+        self.index[updated] = new
+        self.waiting[k] = (self._count(new), updated.size)
+        later = [w for w in self.waiting[k + 1:] if w[1]] or self.waiting
+        pending = int(sum(w[1] for w in later))
         rows = score_rows(updated, self.stride)
-        if rows.size == 0 or pending.size == 0:
+        if rows.size == 0 or pending == 0:
             return self.bias
         scores = np.asarray(backend.scores(), np.float64)[rows]
-        fixed = (np.bincount(self.index, minlength=labels.size)
-                 - np.bincount(self.index[pending], minlength=labels.size))
-        target = sweep_target(self.pi, fixed, pending.size, softmax(scores).mean(axis=0), self.beta)
+        fixed = self.total - sum(w[0] for w in later)
+        target = sweep_target(self.pi, fixed, pending, softmax(scores).mean(axis=0), self.beta)
         self.bias = project_bias(scores, target, self.bias)
         return self.bias
 
@@ -246,6 +268,8 @@ def run_ml(
             record = timings["scales"].pop()
         else:
             vol, temp = start_state(model, base, coarse, params, seed)
+            if model.level == 0:
+                base = None  # the finest scale has taken all it needs from the random start
             inherited = temp == 0
             if annealing:
                 temp[...] = 0.0  # no pixel temperatures: every neighbour's weight 1 - t is 1
@@ -261,6 +285,7 @@ def run_ml(
         if progress is not None and not annealing:  # the ETA's sweeps, known before they run where affordable
             clock.plan(first, forecast_visits(model, temp, inherited, resynth, params.xi, seed, first, n_sweeps,
                                               None if params.sweeps else target) if affordable(model) else [])
+        vol = temp = None  # the back end holds the state now: free the host's float64 copies
         for sweep in range(first, n_sweeps + 1):
             t_sweep = time.perf_counter()
             if annealing:
@@ -269,13 +294,16 @@ def run_ml(
                 temp = backend.temperature()
                 active = (temp > 0) | (inherited & resynth)
             backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias)
-            sets = split_by_colour(active, model.colour, model.n_sets)
-            order = [c for c in set_order(model.n_sets, seed, model.level, sweep) if sets[c].size]
+            order = set_order(model.n_sets, seed, model.level, sweep)
+            if balance is not None:
+                balance.start_sweep(model.set_voxels(c, active) for c in order)
             for k, c in enumerate(order):
-                backend.update(sets[c])
-                if balance is not None:  # the rest of this sweep, or after the last set the whole of it again
-                    pending = np.concatenate([sets[d] for d in order[k + 1:]] or [np.flatnonzero(active)])
-                    bias = balance.after(backend, sets[c], pending)
+                voxels = model.set_voxels(c, active)  # one set's indices at a time (host memory)
+                if not voxels.size:
+                    continue
+                backend.update(voxels)
+                if balance is not None:
+                    bias = balance.after(backend, voxels, k)
                     backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias)
             if annealing:
                 t_prev, t_now = t_now, t_now * params.anneal_cooling
@@ -292,11 +320,12 @@ def run_ml(
                 done = t_now <= target or t_now == 0.0 or sweep == n_sweeps
             log.debug("scale %d sweep %d: T=%.1f visited=%d %.2fs", i + 1, sweep, t_now, visited, sweep_s)
             if checkpoint is not None and checkpoint.due(done):  # before progress: a Ctrl-C there keeps it
-                checkpoint.save(RunState(i, sweep, done, np.array(backend.volume(), copy=True),
-                                         np.array(backend.temperature(), copy=True), inherited.copy(), t_init,
+                # written before save returns: the back end's arrays need no copies (host memory)
+                checkpoint.save(RunState(i, sweep, done, np.asarray(backend.volume()),
+                                         np.asarray(backend.temperature()), inherited, t_init,
                                          target, t_now, np.array(bias, dtype=np.float64),
                                          {"scales": timings["scales"] + [record]},
-                                         np.array(backend.sources(), copy=True) if pruned else None))
+                                         np.asarray(backend.sources()) if pruned else None))
             if progress is not None:
                 eta = clock.eta(i, sweep, sweep_s, visited, model, t_now, t_prev, target,
                                 0 if done else n_sweeps - sweep)
@@ -307,7 +336,7 @@ def run_ml(
                                    exemplar=model.exemplar, volume=lambda: np.array(backend.volume(), copy=True)))
             if done:
                 break
-        coarse = np.asarray(backend.volume(), dtype=np.float64).reshape(model.shape)
+        coarse = np.asarray(backend.volume()).reshape(model.shape)  # float32 on a device, as the state
         record["sweeps"] = len(record["temperatures"])
         record["seconds"] = time.perf_counter() - t_scale
         timings["scales"].append(record)

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.schedule import set_order, split_by_colour
+from ..core.schedule import set_order
 from .model import ScaleModel
 from .reference import new_temperature
 
@@ -44,9 +44,8 @@ def forecast_visits(model: ScaleModel, temp: np.ndarray, inherited: np.ndarray, 
     visits = []
     for sweep in range(first, last + 1):
         active = (temp > 0) | (inherited & resynth)
-        sets = split_by_colour(active, model.colour, model.n_sets)
         for c in set_order(model.n_sets, seed, model.level, sweep):
-            voxels = sets[c]
+            voxels = model.set_voxels(c, active)
             if voxels.size:
                 hot = flat[voxels] > 0  # inherited voxels are re-synthesised at t = 0, which stays
                 flat[voxels[hot]] = new_temperature(model, temp, voxels[hot], xi)

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import InputError
 from .params import VIEW_AXES, MLParams
-from ..core.schedule import colour_sets
+from ..core.schedule import colour_set, colour_sets, set_count
 
 
 def view_offsets(view: str, half: int) -> np.ndarray:
@@ -120,12 +120,20 @@ class ScaleModel:
     patches: np.ndarray  # (R, n)
     bandwidth: float
     labels: np.ndarray  # the grey levels Lambda, ascending
-    colour: np.ndarray  # (Z, Y, X) set of each voxel
-    n_sets: int
+    n_sets: int  # conflict-free colour sets
 
     @property
     def n_sites(self) -> int:
         return self.centres.size
+
+    @property
+    def colour(self) -> np.ndarray:
+        """The set of each voxel, ``(Z, Y, X)`` (made on request: the drivers use :meth:`set_voxels`)."""
+        return colour_sets(self.shape, self.half)[0]
+
+    def set_voxels(self, c: int, active: np.ndarray | None = None) -> np.ndarray:
+        """Flat indices, ascending, of the (*active*) voxels of colour set *c*."""
+        return colour_set(self.shape, self.n_sets, c, active)
 
 
 def check_exemplar_fits(exemplar_shape: tuple[int, int], params: MLParams) -> None:
@@ -157,7 +165,6 @@ def build_scale(
     offsets = np.stack([view_offsets(v, half) for v in params.view_names])
     union = np.unique(offsets.reshape(-1, 3), axis=0)
     sshape = scale_shape(shape, level)
-    colour, n_sets = colour_sets(sshape, half)
     return ScaleModel(
         level=level,
         shape=sshape,
@@ -169,6 +176,5 @@ def build_scale(
         patches=patches,
         bandwidth=h,
         labels=np.unique(labels_img).astype(np.float64),
-        colour=colour,
-        n_sets=n_sets,
+        n_sets=set_count(sshape, half),
     )

@@ -169,7 +169,7 @@ class CLBackend:
                              np.int32(part.size), np.uint32(key[0]), np.uint32(key[1]), np.uint32(TAG_INIT), px,
                              np.uint32(pixels.size))
             cl.enqueue_copy(self.device.queue, part, buf)
-        return out.reshape(shape).astype(np.float64)
+        return out.reshape(shape)  # float32, as on the device: start_state widens one scale at a time
 
     def start_scale(self, model: ScaleModel, vol: np.ndarray, temp: np.ndarray, params: MLParams,
                     sources: np.ndarray | None = None) -> None:

@@ -64,8 +64,8 @@ class Sources:
     @classmethod
     def start(cls, candidates: np.ndarray, n_voxels: int, n_views: int) -> "Sources":
         n_sites = candidates.shape[0]
-        return cls(candidates=candidates, chosen=np.full((n_views, n_voxels), -1, np.int64),
-                   source=np.full(n_voxels, -1, np.int64), index=np.zeros(n_sites, np.int64),
+        return cls(candidates=candidates, chosen=np.full((n_views, n_voxels), -1, np.int32),
+                   source=np.full(n_voxels, -1, np.int32), index=np.zeros(n_sites, np.int64),
                    position=np.zeros(n_sites, np.int64))
 
     @property
@@ -83,6 +83,11 @@ def excess_factor(counts: np.ndarray, level: float) -> np.ndarray:
     """``1 + max(0, counts / level - 1)``: 1 up to the uniform *level*, then growing with the
     excess in units of that level."""
     return 1.0 + np.maximum(0.0, counts / level - 1.0)
+
+
+#: Voxels of a set whose neighbourhoods are gathered at once (host memory: a set of a
+#: large block would otherwise hold every voxel's neighbourhood in float64).
+CHUNK = 1 << 16
 
 
 def _recount(hist: np.ndarray, old: np.ndarray, new: np.ndarray) -> None:
@@ -117,9 +122,11 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
     chosen = np.empty((n_views, voxels.size), np.int64)
     dist = np.empty((n_views, voxels.size))
     for i, view in enumerate(level.params.view_names):
-        queries = voxel_features(vol, coarse, voxels, view, k)
-        best = level.best(i, voxels, vol, coarse, level.w_first, queries)[0]
-        chosen[i], dist[i] = choose(level, queries, best)
+        for lo in range(0, voxels.size, CHUNK):  # a view's choices all see the same index histogram
+            part = slice(lo, lo + CHUNK)
+            queries = voxel_features(vol, coarse, voxels[part], view, k)
+            best = level.best(i, voxels[part], vol, coarse, level.w_first, queries)[0]
+            chosen[i, part], dist[i, part] = choose(level, queries, best)
         _recount(src.index, src.chosen[i, voxels], chosen[i])  # the next view sees this one's choices
         src.chosen[i, voxels] = chosen[i]
     values = level.centres[chosen]

@@ -61,7 +61,7 @@ class Coherence:
         self.site_at = np.full(image_shape, -1, np.int64)
         self.site_at[rows, cols] = np.arange(rows.size)
         self.shape, self.views = tuple(volume_shape), views
-        self.matched = np.full((len(views), int(np.prod(volume_shape))), -1, np.int64)
+        self.matched = np.full((len(views), int(np.prod(volume_shape))), -1, np.int32)  # as the device's
         # What a neighbour matched at site s proposes through its offset j: shift[s, j] (-1:
         # no valid site); its last row answers for an unknown match (s = -1), as similar's
         # last row answers for no site, so candidates() needs no masks.
@@ -81,17 +81,24 @@ class Coherence:
         return out
 
     def inherit(self, coarse: "Coherence") -> None:
-        """Start from the coarser level's matches (its sites, doubled, plus each voxel's parity)."""
-        pos = np.stack(np.unravel_index(np.arange(self.matched.shape[1]), self.shape))
-        parent = np.ravel_multi_index(tuple((pos[a] // 2) % coarse.shape[a] for a in range(3)), coarse.shape)
-        for i, view in enumerate(self.views):
-            row_axis, col_axis = VIEW_AXES[view]
-            s = coarse.matched[i, parent]
-            known = s >= 0
-            s = np.maximum(s, 0)
-            r = 2 * coarse.rows[s] + pos[row_axis] % 2
-            c = 2 * coarse.cols[s] + pos[col_axis] % 2
-            self.matched[i] = self._site(r, c, known)
+        """Start from the coarser level's matches (its sites, doubled, plus each voxel's parity).
+
+        A plane of the block at a time, so that no whole-block index array is made."""
+        depth, n_rows, n_cols = self.shape
+        y, x = np.ogrid[:n_rows, :n_cols]
+        parent_yx = ((y // 2) % coarse.shape[1]) * coarse.shape[2] + (x // 2) % coarse.shape[2]
+        plane = n_rows * n_cols
+        for z in range(depth):
+            pos = (np.full((1, 1), z), y, x)
+            parent = (((z // 2) % coarse.shape[0]) * coarse.shape[1] * coarse.shape[2] + parent_yx).ravel()
+            for i, view in enumerate(self.views):
+                row_axis, col_axis = VIEW_AXES[view]
+                s = coarse.matched[i, parent]
+                known = s >= 0
+                s = np.maximum(s, 0)
+                r = 2 * coarse.rows[s] + np.broadcast_to(pos[row_axis] % 2, (n_rows, n_cols)).ravel()
+                c = 2 * coarse.cols[s] + np.broadcast_to(pos[col_axis] % 2, (n_rows, n_cols)).ravel()
+                self.matched[i, z * plane:(z + 1) * plane] = self._site(r, c, known)
 
     def candidates(self, i: int, voxels: np.ndarray) -> np.ndarray:
         """``(m, NEIGHBOURS^2 * SIMILAR)`` candidate sites of *voxels* in view *i* (-1: none)."""

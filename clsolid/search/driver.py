@@ -18,7 +18,7 @@ from typing import Any, Callable, NamedTuple
 import numpy as np
 
 from ..core.orders import visiting_order
-from ..core.schedule import colour_sets, set_order, split_by_colour
+from ..core.schedule import colour_set, set_count, set_order
 from ..core.slices import insert_slices
 from ..core.synthesis import SweepInfo
 from ..errors import InputError
@@ -96,8 +96,7 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
         ctx = _level(params, pyr, level, parent_shape, table, centres, vol, make_matcher(table), coh)
         coh = ctx.coherence
         update = UPDATES[params.method]
-        colour, n_sets = colour_sets(shapes[level], k // 2)
-        sets = split_by_colour(np.ones(shapes[level], bool), colour, n_sets)
+        n_sets = set_count(shapes[level], k // 2)
         searches = 0
         t_iter = time.perf_counter()
         parent = coarse if use_parent else None
@@ -109,7 +108,7 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
                     searches += update(ctx, vol, parent, np.array([v]))
             else:
                 for c in set_order(n_sets, seed, level, it):
-                    searches += update(ctx, vol, parent, sets[c])
+                    searches += update(ctx, vol, parent, colour_set(shapes[level], n_sets, c))
             if params.specify and ctx.values.size > kopf.MAX_PHASES:
                 _specify(ctx, vol, pyr[level])
             if anchors is not None:
