@@ -78,6 +78,17 @@ def test_eta_tool_reports_the_error(capsys, tool):
     assert "porous80:" in out and "ETA error after the first:" in out and " %" in out
 
 
+def test_eta_tool_can_measure_the_fallback_and_leaves_the_library_as_it_was(capsys, tool):
+    from clsolid.ml import forecast
+
+    library = forecast.REPLAY_TERMS
+    tool("eta").main(["--names", "porous80", "--shape", "16", "--set", "neighborhood=5", "--set", "scales=2",
+                      "--replay-terms", "0"])
+    out = capsys.readouterr().out
+    assert "replayed up to 0 terms a sweep" in out and "porous80:" in out
+    assert forecast.REPLAY_TERMS == library
+
+
 def test_prune_check_tool_compares_the_pruned_lcpdf(capsys, tool):
     tool("prune_check").main(["--names", "porous80", "--shape", "16", "--voxels", "50", "--counts", "4", "9999",
                               "--set", "neighborhood=5", "--set", "scales=2", "--temperature", "0.9"])

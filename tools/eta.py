@@ -8,6 +8,7 @@ finest scale's sweeps (positive: the ETA said more time than was left).
 
     python tools/eta.py                                  # brick, porous50, gravel at 64^3
     python tools/eta.py --names hrtem --shape 48 --set relaxation='"icm"'
+    python tools/eta.py --replay-terms 0     # as on blocks too large to replay (512^3 and up)
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import time
 
 import clsolid
 from clsolid.gallery import gallery_exemplar
+from clsolid.ml import forecast
 
 
 def measure(name: str, shape: int, seed: int, device, options: dict) -> dict:
@@ -43,17 +45,26 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--device", default=None)
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="a synthesize option, the value as JSON (repeatable)")
+    ap.add_argument("--replay-terms", type=float, default=None,
+                    help="replay a scale's temperatures only up to this many neighbour terms a sweep "
+                         f"(default the library's, {forecast.REPLAY_TERMS:.3g}; 0: never, the fallback ETA)")
     args = ap.parse_args(argv)
     options = {k: json.loads(v) for k, v in (s.split("=", 1) for s in args.set)}
     device = clsolid.select_device(args.device)
-    print(f"device: {device.name}; {args.shape}^3, seed {args.seed}, settings {options or 'defaults'}")
-    for name in args.names:
-        r = measure(name, args.shape, args.seed, device, options)
-        first = "–" if r["first"] is None else f"{100 * r['first']:+.0f} %"
-        worst = "–" if r["worst"] is None else f"{100 * r['worst']:+.0f} %"
-        print(f"{name}: {r['seconds']:.1f} s, {r['sweeps']} finest sweeps; ETA error after the first: {first}, "
-              f"worst on the finest scale: {worst}", flush=True)
-
+    library = forecast.REPLAY_TERMS
+    if args.replay_terms is not None:
+        forecast.REPLAY_TERMS = args.replay_terms
+    try:
+        print(f"device: {device.name}; {args.shape}^3, seed {args.seed}, settings {options or 'defaults'}, "
+              f"replayed up to {forecast.REPLAY_TERMS:.3g} terms a sweep")
+        for name in args.names:
+            r = measure(name, args.shape, args.seed, device, options)
+            first = "–" if r["first"] is None else f"{100 * r['first']:+.0f} %"
+            worst = "–" if r["worst"] is None else f"{100 * r['worst']:+.0f} %"
+            print(f"{name}: {r['seconds']:.1f} s, {r['sweeps']} finest sweeps; ETA error after the first: {first}, "
+                  f"worst on the finest scale: {worst}", flush=True)
+    finally:
+        forecast.REPLAY_TERMS = library
 
 if __name__ == "__main__":
     main()

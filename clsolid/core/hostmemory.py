@@ -14,13 +14,14 @@ import numpy as np
 
 from ..errors import HostMemoryError, InputError
 
-#: Host bytes a voxel of the full-resolution block costs at a run's peak, with about 30 %
-#: to spare over what was measured (the growth of peak RSS from 128^3 to 192^3, porous50,
-#: Intel's CPU runtime, whose device buffers are host memory): the likelihood method 36
-#: bytes in one piece and 32 in tiles; the search methods, from 96^3 to 128^3 with the
-#: coherence search, ``kopf`` 50 and ``chen-wang`` 81 (their estimate keeps 50 %).
-#: The drivers hold no whole-block index arrays (each conflict-free set is generated
-#: when it is relaxed, :func:`clsolid.core.schedule.colour_set`).
+#: Host bytes a voxel of the full-resolution block costs at a run's peak, with some room
+#: over what was measured (porous50, Intel's CPU runtime, whose device buffers are host
+#: memory): the likelihood method, the growth of peak RSS from 128^3 to 192^3, 32 bytes in
+#: one piece and 16 in tiles, and 512^3 in tiles of 256 peaked at 44 bytes a voxel, all
+#: told; the search methods, from 96^3 to 128^3 with the coherence search, ``kopf`` 50 and
+#: ``chen-wang`` 81 (their estimate keeps 50 %). The drivers hold no whole-block index
+#: arrays (each conflict-free set is generated when it is relaxed,
+#: :func:`clsolid.core.schedule.colour_set`).
 BYTES_PER_VOXEL = {"ml": 48, "search": 120}
 
 #: Environment variable that overrides the memory thought available (bytes, or with a

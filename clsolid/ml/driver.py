@@ -30,7 +30,7 @@ def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, 
     copied in (1/8 or 8/8), then the ``+in`` slices get this scale's exemplar.
     """
     step = 2**model.level
-    vol = base[::step, ::step, ::step].astype(np.float64)
+    vol = base[::step, ::step, ::step].astype(np.float32)  # label indices: exact in float32
     temp = np.full(model.shape, params.initial_temperature)
     if coarse is not None:
         if params.upsampling == "8/8":
@@ -49,6 +49,9 @@ def label_fractions(values: np.ndarray, labels: np.ndarray) -> np.ndarray:
     """Fraction of *values* on each of the sorted *labels* (a value off the labels, as
     ``h1-mean`` can write, counts for the nearest)."""
     return np.bincount(nearest_level_index(values, labels), minlength=labels.size) / max(np.size(values), 1)
+
+
+_INDEX_RUN = 1 << 20  # voxels whose label index is found, or counted, at once
 
 
 class Balance:
@@ -77,10 +80,16 @@ class Balance:
         self.waiting: list[tuple[np.ndarray, int]] = []
 
     def _index(self, values: np.ndarray) -> np.ndarray:
-        return nearest_level_index(values, self.model.labels).astype(self.dtype)
+        flat = np.ravel(values)
+        out = np.empty(flat.size, self.dtype)
+        for lo in range(0, flat.size, _INDEX_RUN):  # searchsorted's int64 a run at a time (host memory)
+            out[lo:lo + _INDEX_RUN] = nearest_level_index(flat[lo:lo + _INDEX_RUN], self.model.labels)
+        return out
 
     def _count(self, index: np.ndarray) -> np.ndarray:
-        return np.bincount(index, minlength=self.model.labels.size)
+        n = self.model.labels.size
+        return sum((np.bincount(index[lo:lo + _INDEX_RUN], minlength=n) for lo in range(0, index.size, _INDEX_RUN)),
+                   np.zeros(n, np.int64))  # bincount widens to int64: a run at a time
 
     def start_sweep(self, sets: Iterable[np.ndarray]) -> None:
         """Count the labels of this sweep's *sets*, in the order they will be relaxed."""

@@ -192,7 +192,7 @@ class TiledBackend:
         self.tiling = scale_tiling(model, self.tile)
         self.runner.load_scale(model, params, self.tiling.largest_block)
         views = model.offsets.shape[0]
-        self._vol = np.array(vol, np.float32)
+        self._vol = np.asarray(vol, np.float32)  # the driver's own start, not copied (host memory)
         self._temp = np.array(temp, np.float32)
         self._src = (np.full((views,) + model.shape, -1, np.int32) if sources is None
                      else np.array(sources, np.int32).reshape((views,) + model.shape))
