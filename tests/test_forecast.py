@@ -29,24 +29,32 @@ def test_forecast_replays_every_scales_sweeps_and_visits(device, monkeypatch, op
     assert etas[-1] == 0.0 and all(e > 0 for e in etas[len(made[0]):-1])
 
 
-def test_a_scale_too_large_to_replay_is_not_replayed(device, monkeypatch):
+def test_a_scale_too_large_to_replay_is_forecast_on_a_smaller_block(device, monkeypatch):
     """Above REPLAY_TERMS the replay would cost more than the run (NumPy, one core): the
-    finest scale is not replayed, its ETA is extrapolated, and the volume is the same."""
+    finest scale is not replayed; a smaller block with the same structure is, and its
+    visits, scaled up, are close to the run's. The volume is the same."""
     from clsolid.ml import driver, forecast
 
-    made, etas = [], []
+    made, proxied, etas = [], [], []
 
     def spy(*args, **kwargs):
         made.append(forecast_visits(*args, **kwargs))
         return made[-1]
 
+    def proxy_spy(*args, **kwargs):
+        proxied.append(forecast.proxy_visits(*args, **kwargs))
+        return proxied[-1]
+
     monkeypatch.setattr(driver, "forecast_visits", spy)
+    monkeypatch.setattr(driver, "proxy_visits", proxy_spy)
     kw = dict(neighborhood=5, scales=2, rng=2, device=device)
     ex = gallery_exemplar("porous80", 64)
-    want = clsolid.synthesize(ex, (16, 16, 16), **kw)
-    monkeypatch.setattr(forecast, "REPLAY_TERMS", 8**3 * 100)  # the coarse 8^3 scale (45 neighbours) only
-    got = clsolid.synthesize(ex, (16, 16, 16), progress=lambda i: etas.append(i.eta), **kw)
-    assert len(made) == 1  # the coarse scale was replayed, the finest was not
-    assert (got == want).all()
+    want = clsolid.synthesize(ex, (24, 32, 40), **kw)
+    monkeypatch.setattr(forecast, "REPLAY_TERMS", 16**3 * 44)  # the coarse 12x16x20 scale (44 neighbours) only
+    got = clsolid.synthesize(ex, (24, 32, 40), progress=lambda i: etas.append(i.eta), full_output=True, **kw)
+    assert len(made) == 1 and len(proxied) == 1  # the coarse scale was replayed, the finest on a proxy
+    run = got.timings["scales"][1]["visited"]
+    assert len(proxied[0]) == len(run)
+    assert all(abs(p - r) <= 0.1 * r for p, r in zip(proxied[0], run))
+    assert (got.volume == want).all()
     assert etas[-1] == 0.0
-

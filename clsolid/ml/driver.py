@@ -11,7 +11,7 @@ from typing import Any, Callable, Iterable
 import numpy as np
 
 from .balance import project_bias, score_rows, score_stride, softmax, sweep_target
-from .forecast import affordable, forecast_visits
+from .forecast import affordable, forecast_visits, proxy_visits
 from ..exemplar import nearest_level_index
 from .model import ScaleModel, build_scale, check_exemplar_fits
 from .params import MLParams
@@ -126,10 +126,10 @@ class _Clock:
 
     Within a scale the sweeps still to come and the voxels each visits are known in
     advance under ICM and Gibbs (:func:`~clsolid.ml.forecast.forecast_visits`), so the
-    time left there is those visits at the last sweep's rate per visit; otherwise
-    (annealing, or a scale too large to replay: :func:`~clsolid.ml.forecast.affordable`) it
-    is extrapolated from the fall of the global temperature. The scales
-    still to come are estimated from their size.
+    time left there is those visits at the last sweep's rate per visit (for a scale too large
+    to replay, a smaller block's visits scaled up, :func:`~clsolid.ml.forecast.proxy_visits`).
+    Otherwise (annealing, or such a scale resumed midway) it is extrapolated from the fall of
+    the global temperature. The scales still to come are estimated from their size.
     """
 
     def __init__(self, models: list[ScaleModel], params: MLParams):
@@ -292,9 +292,13 @@ def run_ml(
         backend.start_scale(model, vol, temp, params, sources=sources)
         balance = Balance(model, params.balance, vol, bias) if params.balance else None
         if progress is not None and not annealing:  # the ETA's sweeps, known before they run where affordable
-            clock.plan(first, forecast_visits(model, temp, inherited, resynth, params.xi, seed, first, n_sweeps,
-                                              None if params.sweeps else target) if affordable(model) else [])
-        vol = temp = None  # the back end holds the state now: free the host's float64 copies
+            if affordable(model):
+                visits = forecast_visits(model, temp, inherited, resynth, params.xi, seed, first, n_sweeps,
+                                         None if params.sweeps else target)
+            else:  # a smaller block in its place; none for a scale resumed midway
+                visits = proxy_visits(model, params, seed, n_sweeps) if first == 1 else []
+            clock.plan(first, visits)
+        vol = temp = None  # the back end holds the state now: free the host's copies
         for sweep in range(first, n_sweeps + 1):
             t_sweep = time.perf_counter()
             if annealing:

@@ -10,15 +10,23 @@ voxel and sweep, against the run's sum over every exemplar site; but it runs in 
 one core, and the pruned sum is cheap: at 512^3 with 9 x 9 views (153 neighbours) the
 finest scale's replay ran for more than 35 minutes before its first sweep (measured with
 ``tools/bench_scale.py --cases 64:512``). So a scale whose sweep would sum more than
-:data:`REPLAY_TERMS` neighbour terms is not replayed (:func:`affordable`), and its ETA comes
-from the fall of the global temperature instead.
+:data:`REPLAY_TERMS` neighbour terms is not replayed (:func:`affordable`); a smaller block
+with the same structure is replayed in its place (:func:`proxy_visits`): the same rule,
+inherited corners and ``+in`` slice spacing, on a torus of a side that fits the budget,
+its visits scaled by the ratio of the volumes. Its sweeps are not the run's voxel for
+voxel (other set colours, other slice depths), but its share of hot voxels per sweep and
+its number of sweeps follow the same local dynamics.
 """
 
 from __future__ import annotations
 
+import dataclasses
+from typing import Any
+
 import numpy as np
 
-from ..core.schedule import set_order
+from ..core.schedule import set_count, set_order
+from ..core.slices import insert_slices
 from .model import ScaleModel
 from .reference import new_temperature
 
@@ -54,3 +62,36 @@ def forecast_visits(model: ScaleModel, temp: np.ndarray, inherited: np.ndarray, 
         if target is not None and (t_now <= target or t_now == 0.0):
             break
     return visits
+
+
+def proxy_shape(model: ScaleModel, multiple: int) -> tuple[int, int, int]:
+    """The block replayed in place of *model*'s: each axis at most the side whose cube sums
+    :data:`REPLAY_TERMS` terms a sweep, a multiple of *multiple* (so that slice depths and
+    the inherited corners repeat as in the run's block)."""
+    side = int((REPLAY_TERMS / model.union_offsets.shape[0]) ** (1 / 3))
+    side = max(multiple, side // multiple * multiple)
+    return tuple(min(n, side) for n in model.shape)
+
+
+def proxy_visits(model: ScaleModel, params: Any, seed: int, last: int) -> list[int]:
+    """Forecast visits of a scale too large to replay, from its first sweep to the one that
+    ends it (at most *last*): a :func:`proxy_shape` block started as the run's (t = 0 on the
+    inherited corners below the coarsest scale and on the ``+in`` slices, at the run's
+    spacing), replayed by :func:`forecast_visits`, scaled to the run's volume."""
+    step = 2 ** (params.scales - 1 - model.level)  # slice depths at this scale are multiples of it
+    shape = proxy_shape(model, 2 * step)
+    proxy = dataclasses.replace(model, shape=shape, n_sets=set_count(shape, model.half))
+    full = tuple(n * 2**model.level for n in shape)
+    plan = params
+    if params.insert_slices:  # a fixed count: keep the run's spacing, not its count, on the smaller block
+        spacing = np.mean([n * 2**model.level for n in model.shape]) / params.insert_slices
+        plan = dataclasses.replace(params, insert_slices=None, insert_spacing=max(1.0, float(spacing)))
+    temp = np.full(shape, params.initial_temperature)
+    if model.level < params.scales - 1:
+        temp[::2, ::2, ::2] = 0.0
+    temp[insert_slices(np.zeros(shape, np.float32), model.exemplar, plan, model.level, seed, full)] = 0.0
+    target = None if params.sweeps else (1.0 - params.stop_fraction) * float(temp.sum())
+    visits = forecast_visits(proxy, temp, temp == 0, params.inherited == "resynthesize", params.xi, seed, 1,
+                             last, target)
+    scale = np.prod(model.shape) / np.prod(shape)
+    return [int(round(v * scale)) for v in visits]
