@@ -19,7 +19,7 @@ METHODS = ("ml", "wl", "kopf", "chen-wang")
 OUTPUTS = ("values", "labels")
 #: Options of the search methods (clsolid.search.params.SearchParams).
 _SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order", "causal", "histogram", "candidates",
-                   "specify", "search", "balance", "insert_spacing")
+                   "specify", "search", "exact_passes", "balance", "insert_spacing")
 #: Options of the search methods that are not parameters of the method (what to report).
 _SEARCH_REPORTS = ("site_map",)
 #: The neighbourhood side each method uses when none is given (ML: the thesis case; WL: ch5_np_common).
@@ -149,7 +149,9 @@ def synthesize(
         exemplar's phase fractions, as the likelihood method's balance; default 1, 0 = the
         thesis), ``search``
         (``"exact"``, default: every exemplar site; ``"coherence"``: the k-coherence
-        candidates of the voxel's neighbours' matches, several times faster), and
+        candidates of the voxel's neighbours' matches, several times faster),
+        ``exact_passes`` (with ``"coherence"``: the first passes of every level search every
+        site and seed the candidates of the rest; default 0), and
         ``site_map=True`` (with ``full_output``) adds the position
         histogram, ``SynthesisResult.site_use``; they return float64 volumes of exemplar values or their means, and
         ``output="labels"`` is refused. The ML-only arguments and options (``heuristic``,

@@ -89,6 +89,9 @@ def _add_synth(sub) -> None:
     p.add_argument("--search", choices=SEARCHES, default="exact",
                    help="search methods: each view's best match over every exemplar site (default) or among the "
                         "k-coherence candidates of the voxel's neighbours' matches (faster)")
+    p.add_argument("--exact-passes", type=int, default=0, metavar="N",
+                   help="search methods, --search coherence: the first N passes of every level search every "
+                        "site, seeding the candidates of the passes after (default %(default)s)")
     p.add_argument("--candidates", type=int, default=DEFAULT_CANDIDATES,
                    help="chen-wang: candidate set size per exemplar pixel, itself included (default %(default)s)")
     p.add_argument("--site-map", type=Path, default=None,
@@ -286,7 +289,7 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "prune_similar",
             "prune_sample", "prune_min_weight", "tile", "scheduler", "workers", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram", "candidates",
-            "specify", "search", "site_map", "source_map")
+            "specify", "search", "exact_passes", "site_map", "source_map")
 
 
 #: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
@@ -376,7 +379,7 @@ def cmd_synth(args) -> int:
         options = dict(iterations=args.iterations, inner=args.inner, parent=not args.no_parent,
                        init=args.init, rule=args.rule, order=args.order, causal=args.causal,
                        histogram=args.histogram, candidates=args.candidates, search=args.search,
-                       specify=args.specify, builtin_size=args.builtin_size)
+                       exact_passes=args.exact_passes, specify=args.specify, builtin_size=args.builtin_size)
         for name in ("balance", "insert_spacing"):  # kopf's defaults are the flags' (ml's); the others' are off
             if args.method == "kopf" or getattr(args, name) != SYNTH_DEFAULTS[name]:
                 options[name] = getattr(args, name)

@@ -13,6 +13,7 @@ from clsolid.search.driver import run_search
 from clsolid.search.features import valid_sites
 from clsolid.search.match import CLMatcher, ReferenceMatcher, best_match_reference, exemplar_table
 from clsolid.search.params import SearchParams
+from clsolid.errors import InputError
 
 
 def _coherence(shape=(4, 5, 6), image=(10, 10), k=3, views=("front", "right")):
@@ -122,6 +123,33 @@ def test_opencl_run_matches_the_reference(device, method, scales):
     assert agree >= 0.99, f"only {agree:.2%} of voxels agree with the float64 reference"
 
 
+@pytest.mark.parametrize("method", ["wl", "kopf", "chen-wang"])
+def test_exact_passes_search_every_site_and_seed_the_candidates(device, method):
+    """exact_passes = every pass: the exact search's block, bit for bit (the coherence state
+    is only recorded). One exact pass: its matches are what the next passes' candidates come
+    from, on the device as with the float64 reference, and the block is not the one
+    without it."""
+    ex = gallery_exemplar("composite3", 64)[:32, :32].astype(np.float64)
+    common = dict(method=method, neighborhood=5, scales=2, iterations=3, specify=False)
+    make = lambda t: CLMatcher(device, t)
+    exact = run_search(ex, (10, 12, 14), SearchParams(**common), 3, make).volume
+    every = run_search(ex, (10, 12, 14), SearchParams(search="coherence", exact_passes=3, **common), 3, make).volume
+    np.testing.assert_array_equal(every, exact)
+    one_scale = {**common, "scales": 1}  # integer grey levels: device and reference agree exactly
+    params = SearchParams(search="coherence", exact_passes=1, **one_scale)
+    once = run_search(ex, (10, 12, 14), params, 3, make).volume
+    np.testing.assert_array_equal(once, run_search(ex, (10, 12, 14), params, 3, ReferenceMatcher).volume)
+    assert not np.array_equal(once, run_search(ex, (10, 12, 14), SearchParams(search="coherence", **one_scale), 3,
+                                               make).volume)
+
+
+def test_exact_passes_need_the_coherence_search():
+    with pytest.raises(InputError, match="search='coherence'"):
+        SearchParams(method="kopf", exact_passes=1)
+    with pytest.raises(InputError, match="exact_passes"):
+        SearchParams(method="kopf", search="coherence", exact_passes=-1)
+
+
 def test_coherence_matches_are_near_the_exhaustive_ones(device):
     """On a finished kopf block, each voxel's coherence match is never better than the
     exhaustive one (it searches a subset; its distances are summed in another order, so
@@ -169,3 +197,9 @@ def test_synthesize_and_cli_take_the_search(tmp_path):
     assert json.loads((tmp_path / "k.json").read_text())["params"]["search"] == "coherence"
     np.testing.assert_array_equal(np.load(out), a)
     assert main(["synth", "brick", "-o", str(out), "--search", "coherence", "--shape", "8", "8", "8"]) != 0  # ml
+    assert main(["synth", "brick", "-o", str(out), "--method", "kopf", "--search", "coherence", "--exact-passes", "1",
+                 "--shape", "8", "8", "8", "--iterations", "2", "--seed", "1", "-q"]) == 0
+    assert json.loads((tmp_path / "k.json").read_text())["params"]["exact_passes"] == 1
+    np.testing.assert_array_equal(np.load(out), clsolid.synthesize("brick", (8, 8, 8), method="kopf", search="coherence",
+                                                                   exact_passes=1, iterations=2, rng=1))
+    assert main(["synth", "brick", "-o", str(out), "--exact-passes", "1", "--shape", "8", "8", "8"]) != 0  # ml

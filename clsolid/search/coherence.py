@@ -100,6 +100,12 @@ class Coherence:
                 c = 2 * coarse.cols[s] + np.broadcast_to(pos[col_axis] % 2, (n_rows, n_cols)).ravel()
                 self.matched[i, z * plane:(z + 1) * plane] = self._site(r, c, known)
 
+    def record(self, i: int, voxels: np.ndarray, sites: np.ndarray) -> None:
+        """Take *sites* as the matches of *voxels* in view *i* (found by another search)."""
+        self.matched[i, voxels] = sites
+        if self._device is not None:
+            self._device._sent[i] = False  # the device's copy is stale
+
     def candidates(self, i: int, voxels: np.ndarray) -> np.ndarray:
         """``(m, NEIGHBOURS^2 * SIMILAR)`` candidate sites of *voxels* in view *i* (-1: none)."""
         row_axis, col_axis = VIEW_AXES[self.views[i]]

@@ -101,6 +101,7 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
         t_iter = time.perf_counter()
         parent = coarse if use_parent else None
         for it in range(1, params.iterations + 1):
+            ctx.exhaustive = it <= params.exact_passes
             if params.method == "kopf" and params.rule == "overlap":
                 searches += kopf.overlap_pass(ctx, vol, parent)
             elif params.order != "sets":

@@ -87,6 +87,7 @@ class Level:
     histogram: LevelHistogram | None = None
     sources: Any = None
     coherence: Any = None
+    exhaustive: bool = False  # this pass searches every site even under the coherence search
 
     def best(self, view: int, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None,
              weights: np.ndarray, queries: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -96,8 +97,11 @@ class Level:
         *queries*, their neighbourhoods, are gathered here unless given. Returns
         ``(site (m,), distance (m,))``."""
         k = self.params.neighborhood
-        if self.coherence is not None:
+        if self.coherence is not None and not self.exhaustive:
             return self.coherence.search(self.matcher, view, voxels, vol, coarse, k, weights, queries)
         if queries is None:
             queries = voxel_features(vol, coarse, voxels, self.params.view_names[view], k)
-        return self.matcher.best(queries, weights)
+        site, least = self.matcher.best(queries, weights)
+        if self.coherence is not None:  # an exact pass seeds the candidates of the passes after
+            self.coherence.record(view, voxels, site)
+        return site, least

@@ -94,6 +94,10 @@ class SearchParams:
         site (default, the reference), or the accelerated one, among the k-coherence
         candidates that the voxel's 3 x 3 neighbours' matches propose
         (``clsolid.search.coherence``; exhaustive where they propose none).
+    exact_passes : int
+        ``search="coherence"`` only: the first ``exact_passes`` passes of every level search
+        every exemplar site, and their matches seed the candidates of the passes after
+        (0: only where no neighbour proposes a site).
     specify : bool or None
         ``wl`` and ``kopf``: after every pass, map the block's grey levels rank for rank
         onto the level exemplar's histogram (``clsolid.search.specify``; a departure from
@@ -136,6 +140,7 @@ class SearchParams:
     histogram: str = "global"
     candidates: int = DEFAULT_CANDIDATES
     search: str = "exact"
+    exact_passes: int = 0
     specify: bool | None = None
     balance: float | None = None
     insert_spacing: float | None = None
@@ -164,6 +169,10 @@ class SearchParams:
         if self.histogram != "global" and self.method != "kopf":
             raise InputError(f"histogram={self.histogram!r} is kopf's re-weighting; method {self.method!r} has none")
         one_of("search", self.search, SEARCHES)
+        int_in("exact_passes", self.exact_passes, 0, 1000)
+        if self.exact_passes and self.search != "coherence":
+            raise InputError(f"exact_passes={self.exact_passes!r} seeds the coherence search: give "
+                             "search='coherence' (the exact search searches every site in every pass)")
         int_in("candidates", self.candidates, 1, MAX_K)
         if self.candidates != DEFAULT_CANDIDATES and self.method != "chen-wang":
             raise InputError(f"candidates={self.candidates!r} is chen-wang's candidate set; method "
