@@ -101,3 +101,21 @@ def test_a_run_keeps_the_exemplar_fractions(device):
         got[beta] = label_fractions(vol, np.array([0.0, 1.0]))[1]
     assert abs(got[1.0] - want) < 0.01, got
     assert abs(got[0.0] - want) > abs(got[1.0] - want), got
+
+
+@pytest.mark.parametrize("kind", ["opencl", "tiled", "reference"])
+def test_the_balance_reads_a_sets_values_and_score_rows_as_the_whole_would_give(device, kind):
+    """After every set the balance reads only that set's values and score rows (a gather on
+    the device, not the whole block): the same numbers as the whole block's arrays."""
+    from clsolid.ml.reference import ReferenceBackend
+    from clsolid.ml.tiled import TiledBackend
+
+    backend = {"opencl": lambda: CLBackend(device), "tiled": lambda: TiledBackend(CLBackend(device), 8),
+               "reference": ReferenceBackend}[kind]()
+    labels = np.where(gallery_exemplar("porous80", 64)[:32, :32] > 0, 0.0, 1.0)
+    run_ml(labels, (12, 12, 12), MLParams(neighborhood=5, scales=1, sweeps=1), 3, backend)
+    voxels = np.random.default_rng(0).choice(12**3, 200, replace=False)
+    np.testing.assert_array_equal(backend.values(voxels), np.asarray(backend.volume()).ravel()[voxels])
+    rows = np.arange(0, n_score_slots((12, 12, 12)), 3)
+    np.testing.assert_array_equal(backend.read_scores(rows), np.asarray(backend.scores())[rows])
+    assert np.asarray(backend.scores())[rows].any()  # the rows hold scores, not the zeros they start with

@@ -102,7 +102,7 @@ class Balance:
         again; they aim at whatever brings the whole volume to the exemplar's fractions,
         given the labels of all the others.
         """
-        new = self._index(np.asarray(backend.volume()).ravel()[updated])
+        new = self._index(backend.values(updated))
         self.total += self._count(new) - self._count(self.index[updated])
         self.index[updated] = new
         self.waiting[k] = (self._count(new), updated.size)
@@ -111,7 +111,7 @@ class Balance:
         rows = score_rows(updated, self.stride)
         if rows.size == 0 or pending == 0:
             return self.bias
-        scores = np.asarray(backend.scores(), np.float64)[rows]
+        scores = np.asarray(backend.read_scores(rows), np.float64)
         fixed = self.total - sum(w[0] for w in later)
         target = sweep_target(self.pi, fixed, pending, softmax(scores).mean(axis=0), self.beta)
         self.bias = project_bias(scores, target, self.bias)

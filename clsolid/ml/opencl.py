@@ -370,6 +370,11 @@ class CLBackend:
             values[:, i: i + n], sources[:, i: i + n] = part_values, part_sources
         return values[0], values[1], sources
 
+    def values(self, voxels: np.ndarray) -> np.ndarray:
+        """The values of some voxels of the block (flat indices), gathered on the device: the
+        balance's read after every set, which would otherwise copy the whole block."""
+        return self.read_voxels(voxels)[0]
+
     def sources(self) -> np.ndarray:
         """Each voxel's source site per view, ``(views, voxels)`` (-1: none yet), of the block
         the state holds (the whole volume, or a tile)."""

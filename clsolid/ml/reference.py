@@ -261,6 +261,14 @@ class ReferenceBackend:
         """Combined log scores before the bias of the kept voxels (see ``CLBackend.scores``)."""
         return self._scores
 
+    def read_scores(self, rows: np.ndarray) -> np.ndarray:
+        """Some *rows* of :meth:`scores`."""
+        return self._scores[rows]
+
+    def values(self, voxels: np.ndarray) -> np.ndarray:
+        """The values of some voxels (flat indices)."""
+        return self.vol.ravel()[voxels]
+
     def sources(self) -> np.ndarray:
         """Each voxel's source site per view, ``(views, voxels)`` (-1: none yet)."""
         return self.src

@@ -225,6 +225,14 @@ class TiledBackend:
         """Each voxel's source site per view, ``(views, voxels)`` (-1: none yet)."""
         return self._src.reshape(self._src.shape[0], -1)
 
+    def values(self, voxels: np.ndarray) -> np.ndarray:
+        """The values of some voxels (flat indices of the whole block)."""
+        return self._vol.ravel()[voxels]
+
+    def read_scores(self, rows: np.ndarray) -> np.ndarray:
+        """Some *rows* of :meth:`scores`."""
+        return self._scores[rows]
+
     def scores(self) -> np.ndarray:
         """As :meth:`clsolid.ml.opencl.CLBackend.scores`: the whole volume's slots, as the tiles
         gave back those of the voxels they updated."""
