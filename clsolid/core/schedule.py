@@ -66,4 +66,3 @@ def colour_set(shape: tuple[int, int, int], n_sets: int, c: int, active: np.ndar
                + np.arange((cx - z) % k, cols, k)[None, :]).ravel() for z in range(depth)]
     idx = np.concatenate(planes) if planes else np.empty(0, np.intp)
     return idx if active is None else idx[np.ravel(active)[idx]]
-

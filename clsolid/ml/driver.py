@@ -6,7 +6,7 @@ import logging
 import math
 import time
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -64,9 +64,10 @@ class Balance:
     to sweep by several points).
 
     It keeps each voxel's label index (one byte a voxel up to 256 labels), the whole
-    volume's label counts, and each set's counts for the sweep (:meth:`start_sweep`): a
-    set's labels change only when it is relaxed, so the voxels still to come are counted
-    without listing them.
+    volume's label counts, and the sweep's counts (:meth:`start_sweep`): of the voxels still
+    to come, as their labels were when the sweep began (a voxel's label changes only when it
+    is relaxed), and of all the sweep's voxels as they are now; so the voxels still to come
+    are counted without listing them.
     """
 
     def __init__(self, model: ScaleModel, beta: float, volume: np.ndarray, bias: np.ndarray) -> None:
@@ -77,7 +78,6 @@ class Balance:
         self.dtype = np.min_scalar_type(max(model.labels.size - 1, 0))
         self.index = self._index(volume)  # each voxel's label, kept up to date
         self.total = self._count(self.index)
-        self.waiting: list[tuple[np.ndarray, int]] = []
 
     def _index(self, values: np.ndarray) -> np.ndarray:
         flat = np.ravel(values)
@@ -91,28 +91,32 @@ class Balance:
         return sum((np.bincount(index[lo:lo + _INDEX_RUN], minlength=n) for lo in range(0, index.size, _INDEX_RUN)),
                    np.zeros(n, np.int64))  # bincount widens to int64: a run at a time
 
-    def start_sweep(self, sets: Iterable[np.ndarray]) -> None:
-        """Count the labels of this sweep's *sets*, in the order they will be relaxed."""
-        self.waiting = [(self._count(self.index[s]), s.size) for s in sets]
+    def start_sweep(self, active: np.ndarray) -> None:
+        """Count the labels of the voxels this sweep relaxes (*active*), none relaxed yet."""
+        mask = np.ravel(active)
+        self.coming, self.n_coming = self._count(self.index[mask]), int(np.count_nonzero(mask))
+        self.swept, self.n_swept = self.coming.copy(), self.n_coming
 
-    def after(self, backend: Any, updated: np.ndarray, k: int) -> np.ndarray:
-        """The bias for the voxels still to come after the sweep's *k*-th set, *updated*.
+    def after(self, backend: Any, updated: np.ndarray) -> np.ndarray:
+        """The bias for the voxels still to come after the set *updated* was relaxed.
 
-        Those voxels are the later sets' or, after the last set, all the sweep's voxels
-        again; they aim at whatever brings the whole volume to the exemplar's fractions,
-        given the labels of all the others.
+        Those voxels are the sweep's later sets' or, after its last set, all the sweep's
+        voxels again; they aim at whatever brings the whole volume to the exemplar's
+        fractions, given the labels of all the others.
         """
         new = self._index(backend.values(updated))
-        self.total += self._count(new) - self._count(self.index[updated])
+        old_counts, new_counts = self._count(self.index[updated]), self._count(new)
         self.index[updated] = new
-        self.waiting[k] = (self._count(new), updated.size)
-        later = [w for w in self.waiting[k + 1:] if w[1]] or self.waiting
-        pending = int(sum(w[1] for w in later))
+        self.total += new_counts - old_counts
+        self.swept += new_counts - old_counts
+        self.coming -= old_counts
+        self.n_coming -= updated.size
+        later, pending = (self.coming, self.n_coming) if self.n_coming else (self.swept, self.n_swept)
         rows = score_rows(updated, self.stride)
         if rows.size == 0 or pending == 0:
             return self.bias
         scores = np.asarray(backend.read_scores(rows), np.float64)
-        fixed = self.total - sum(w[0] for w in later)
+        fixed = self.total - later
         target = sweep_target(self.pi, fixed, pending, softmax(scores).mean(axis=0), self.beta)
         self.bias = project_bias(scores, target, self.bias)
         return self.bias
@@ -309,14 +313,14 @@ def run_ml(
             backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias)
             order = set_order(model.n_sets, seed, model.level, sweep)
             if balance is not None:
-                balance.start_sweep(model.set_voxels(c, active) for c in order)
-            for k, c in enumerate(order):
+                balance.start_sweep(active)
+            for c in order:
                 voxels = model.set_voxels(c, active)  # one set's indices at a time (host memory)
                 if not voxels.size:
                     continue
                 backend.update(voxels)
                 if balance is not None:
-                    bias = balance.after(backend, voxels, k)
+                    bias = balance.after(backend, voxels)
                     backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias)
             if annealing:
                 t_prev, t_now = t_now, t_now * params.anneal_cooling

@@ -89,15 +89,15 @@ class Coherence:
         parent_yx = ((y // 2) % coarse.shape[1]) * coarse.shape[2] + (x // 2) % coarse.shape[2]
         plane = n_rows * n_cols
         for z in range(depth):
-            pos = (np.full((1, 1), z), y, x)
+            parity = (z % 2, y % 2, x % 2)  # each voxel's place within its parent, per axis
             parent = (((z // 2) % coarse.shape[0]) * coarse.shape[1] * coarse.shape[2] + parent_yx).ravel()
             for i, view in enumerate(self.views):
                 row_axis, col_axis = VIEW_AXES[view]
                 s = coarse.matched[i, parent]
                 known = s >= 0
                 s = np.maximum(s, 0)
-                r = 2 * coarse.rows[s] + np.broadcast_to(pos[row_axis] % 2, (n_rows, n_cols)).ravel()
-                c = 2 * coarse.cols[s] + np.broadcast_to(pos[col_axis] % 2, (n_rows, n_cols)).ravel()
+                r = 2 * coarse.rows[s] + np.broadcast_to(parity[row_axis], (n_rows, n_cols)).ravel()
+                c = 2 * coarse.cols[s] + np.broadcast_to(parity[col_axis], (n_rows, n_cols)).ravel()
                 self.matched[i, z * plane:(z + 1) * plane] = self._site(r, c, known)
 
     def record(self, i: int, voxels: np.ndarray, sites: np.ndarray) -> None:
