@@ -119,3 +119,18 @@ def test_the_balance_reads_a_sets_values_and_score_rows_as_the_whole_would_give(
     rows = np.arange(0, n_score_slots((12, 12, 12)), 3)
     np.testing.assert_array_equal(backend.read_scores(rows), np.asarray(backend.scores())[rows])
     assert np.asarray(backend.scores())[rows].any()  # the rows hold scores, not the zeros they start with
+
+
+def test_serial_blas_holds_numpy_blas_at_one_thread_and_restores_it():
+    from threadpoolctl import threadpool_info
+
+    from clsolid.core.threads import serial_blas
+
+    def blas_threads():
+        return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+
+    before = blas_threads()
+    with serial_blas():
+        inside = blas_threads()
+    assert inside and set(inside) == {1}  # NumPy always loads a BLAS
+    assert blas_threads() == before

@@ -18,6 +18,7 @@ from .params import MLParams
 from ..core.philox import relax_tag
 from ..core.schedule import set_order
 from ..core.slices import insert_slices
+from ..core.threads import serial_blas
 from ..core.synthesis import SweepInfo, SynthesisResult, check_shape, resolve_seed  # noqa: F401 (re-exported)
 
 log = logging.getLogger(__name__)
@@ -118,7 +119,8 @@ class Balance:
         scores = np.asarray(backend.read_scores(rows), np.float64)
         fixed = self.total - later
         target = sweep_target(self.pi, fixed, pending, softmax(scores).mean(axis=0), self.beta)
-        self.bias = project_bias(scores, target, self.bias)
+        with serial_blas():  # small matrices, while the device's threads hold the cores
+            self.bias = project_bias(scores, target, self.bias)
         return self.bias
 
 
