@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
@@ -11,6 +12,9 @@ from .errors import InputError
 from .ml.params import MLParams
 from .core.hostmemory import check_host_memory
 from .ml.driver import SweepInfo, SynthesisResult, check_shape, resolve_seed, run_ml
+
+if TYPE_CHECKING:
+    from .search.params import SearchParams
 
 log = logging.getLogger(__name__)
 
@@ -37,6 +41,29 @@ _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
 def is_reference(device) -> bool:
     """Whether *device* asks for the slow float64 NumPy back end."""
     return isinstance(device, str) and device.lower() == "reference"
+
+
+def slice_plan(params: dict) -> "MLParams | SearchParams":
+    """The parameters a result records (``SynthesisResult.params``, a sidecar's ``params``) as
+    its method's parameter class (:class:`~clsolid.ml.params.MLParams` or
+    :class:`~clsolid.search.params.SearchParams`): both say where the ``+in`` (or anchor)
+    slices are (:mod:`clsolid.core.slices`)."""
+    if params.get("method", "ml") == "ml":
+        return MLParams.from_dict(params)
+    from .search.params import SearchParams
+
+    names = {f.name for f in dataclasses.fields(SearchParams)}
+    return SearchParams(**{k: v for k, v in params.items() if k in names})
+
+
+def inserted_slices(params: dict, shape: tuple[int, int, int]) -> dict[str, np.ndarray]:
+    """Depths of the ``+in`` (or anchor) slices of each view of a ``shape`` block grown with
+    *params* (as :func:`slice_plan` reads them); an empty array for a view without."""
+    from .core.slices import inserted_depths
+    from .metrics import VIEWS
+
+    depths = inserted_depths(tuple(shape), slice_plan(params))
+    return {view: np.asarray(depths.get(view, ()), dtype=int) for view in VIEWS}
 
 
 def _check_output(output) -> None:

@@ -15,7 +15,6 @@ import sys
 import time
 from pathlib import Path
 
-from .core.views import DEPTH_AXIS, VIEW_SETS
 from .errors import ClsolidError, DeviceMemoryError, HostMemoryError, InputError, KernelBuildError, NoDeviceError
 from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, LIKELIHOODS, RELAXATIONS, SLICE_LAYOUTS,
                      UPSAMPLING, MLParams)
@@ -355,7 +354,7 @@ def _dask_client(args):
 
 
 def cmd_synth(args) -> int:
-    from .api import resume, synthesize
+    from .api import resume, slice_plan, synthesize
     from .preview import save_preview, save_site_map
     from .core.slices import preview_depths
     from .volumeio import save_volume
@@ -429,12 +428,9 @@ def cmd_synth(args) -> int:
             "command": " ".join(sys.argv), "written_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
     sidecar.write_text(json.dumps(meta, indent=2, default=float))
     if args.preview is not None:
-        if args.method == "ml":
-            params = MLParams.from_dict(result.params)
-            views, depths = params.view_names, preview_depths(result.volume.shape, params)
-        else:  # no +in slices to avoid: the middle of each axis
-            views, depths = VIEW_SETS[args.views], {v: result.volume.shape[a] // 2 for v, a in DEPTH_AXIS.items()}
-        save_preview(args.preview, result.exemplar, result.volume, constrained=views, depths=depths)
+        plan = slice_plan(result.params)  # away from the +in (or anchor) slices, which show the exemplar
+        save_preview(args.preview, result.exemplar, result.volume, constrained=plan.view_names,
+                     depths=preview_depths(result.volume.shape, plan))
     if args.site_map is not None:
         save_site_map(args.site_map, result.site_use)
     if args.source_map is not None:

@@ -56,6 +56,10 @@ def add_evaluate_arguments(parser: argparse.ArgumentParser) -> None:
                         help="a convergence track to summarise (and plot with --plot)")
     parser.add_argument("--max-slices", type=int, default=16,
                         help="slices per view, evenly spaced (default 16; 0 = all)")
+    parser.add_argument("--keep-inserted", action="store_true",
+                        help="measure the +in (or anchor) slices too; by default those of a `clsolid "
+                             "synth` volume, read from its JSON sidecar, are left out: they start as "
+                             "exemplar copies and would flatter their view's scores")
     parser.add_argument("--repeats", type=int, default=5,
                         help="random halves and shuffles per reference (default 5; 0 = none)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the references (default 0)")
@@ -105,9 +109,14 @@ def _run_evaluation(args: argparse.Namespace) -> None:
         exemplar, levels, note = like_with_like(exemplar, args.volume)
         if note:
             print(note)
+    exclude: dict = {}
+    if not args.keep_inserted:
+        exclude, note = inserted_from_sidecar(args.volume, volume.shape)
+        if note:
+            print(note)
     report = evaluate(exemplar, volume, views=args.views, constrained=args.constrained or (),
                       levels=levels, max_slices=args.max_slices or None, rng=args.seed,
-                      reference_repeats=args.repeats, periodic=not args.non_periodic)
+                      reference_repeats=args.repeats, periodic=not args.non_periodic, exclude=exclude)
     report["files"] = {"exemplar": str(args.exemplar), "volume": str(args.volume)}
     print(format_table(report))
     if args.output:
@@ -183,6 +192,33 @@ def like_with_like(exemplar: np.ndarray, volume_path: Any) -> tuple[np.ndarray, 
     if exact or levels is None:
         return exemplar, None, ""
     return exemplar, int(levels), f"{sidecar}: level means of {levels} levels; both quantised to {levels} levels"
+
+
+def inserted_from_sidecar(volume_path: Any, shape: tuple) -> tuple[dict, str]:
+    """The ``+in`` (or anchor) slices of a ``clsolid synth`` volume, from its JSON sidecar.
+
+    Returns
+    -------
+    (exclude, note)
+        Slice indices per view to pass to :func:`evaluate` as ``exclude``, and a line saying
+        what is left out ("" and no slices without a sidecar, or for a volume whose shape is
+        not the one the sidecar records, or for a synthesis without such slices).
+    """
+    from .api import inserted_slices
+
+    sidecar = pathlib.Path(volume_path).with_suffix(".json")
+    try:
+        meta = json.loads(sidecar.read_text())
+        params = dict(meta["params"])
+        recorded = tuple(params.get("shape") or ())
+        depths = inserted_slices(params, shape) if recorded in ((), tuple(shape)) else {}
+    except (OSError, ValueError, KeyError, TypeError, ClsolidError):
+        return {}, ""
+    depths = {v: d for v, d in depths.items() if d.size}
+    if not depths:
+        return {}, ""
+    counts = ", ".join(f"{len(d)} {v}" for v, d in depths.items())
+    return depths, f"{sidecar}: leaving out the +in slices ({counts}; --keep-inserted measures them)"
 
 
 def _squeeze(arr: np.ndarray) -> np.ndarray:

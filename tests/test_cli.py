@@ -56,6 +56,27 @@ def test_evaluate_compares_like_with_like_through_the_sidecar(tmp_path, capsys, 
     assert "level means of 8 levels" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("method", ["ml", "kopf"])
+def test_evaluate_leaves_out_the_inserted_slices_named_by_the_sidecar(tmp_path, capsys, device, method):
+    """+in (and kopf's anchor) slices start as exemplar copies: evaluate skips them unless asked."""
+    from clsolid.api import inserted_slices
+
+    out = tmp_path / "v.npy"
+    assert main(["synth", "brick", "-o", str(out), *FAST, "-q", "--method", method]) == 0
+    params = json.loads(out.with_suffix(".json").read_text())["params"]
+    inserted = inserted_slices(params, np.load(out).shape)
+    assert inserted["front"].size and inserted["right"].size
+    for keep in ([], ["--keep-inserted"]):
+        assert main(["evaluate", "brick", str(out), "--repeats", "2", "--max-slices", "0",
+                     "-o", str(tmp_path / "r.json"), *keep]) == 0
+        views = json.loads((tmp_path / "r.json").read_text())["views"]
+        for view in ("front", "right"):
+            used = set(views[view]["slice_indices"])
+            assert used.isdisjoint(inserted[view].tolist()) != bool(keep)
+        assert len(views["top"]["slice_indices"]) == np.load(out).shape[1]  # no +in slices in the top view
+    assert "leaving out the +in slices" in capsys.readouterr().out
+
+
 def test_same_seed_same_file(tmp_path, device):
     for name in ("a.npy", "b.npy"):
         assert main(["synth", "-o", str(tmp_path / name), *FAST, "-q", "--device", "0:0"]) == 0

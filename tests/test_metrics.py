@@ -74,6 +74,30 @@ def test_view_slices_subsample_evenly():
     assert len(view_slices(vol, "front", max_slices=50)) == 20
 
 
+def test_view_slices_leave_out_the_excluded_ones_and_space_the_rest_evenly():
+    vol = np.arange(20)[:, None, None] * np.ones((1, 3, 3))
+    every = view_slices(vol, "front", exclude=[0, 5, 10, 15])
+    np.testing.assert_array_equal(every[:, 0, 0], [i for i in range(20) if i % 5])
+    sub = view_slices(vol, "front", max_slices=4, exclude=[0, 5, 10, 15])  # centres of 4 blocks of the 16 left
+    np.testing.assert_array_equal(sub[:, 0, 0], [3, 8, 13, 18])
+    np.testing.assert_array_equal(view_slices(vol, "front", 4, exclude=[]), view_slices(vol, "front", 4))
+    with pytest.raises(InputError, match="0..19"):
+        view_slices(vol, "front", exclude=[20])
+    with pytest.raises(InputError, match="nothing is left"):
+        view_slices(vol, "front", exclude=range(20))
+
+
+def test_evaluate_excludes_slices_per_view_and_records_them():
+    rng = np.random.default_rng(0)
+    ex, vol = rng.random((32, 32)), rng.random((16, 16, 16))
+    rep = evaluate(ex, vol, exclude={"right": [0, 7, 8]}, max_slices=None, reference_repeats=2)
+    assert rep["views"]["right"]["slice_indices"] == [i for i in range(16) if i not in (0, 7, 8)]
+    assert rep["views"]["front"]["slice_indices"] == list(range(16))
+    assert rep["settings"]["excluded_slices"] == {"right": [0, 7, 8]}
+    with pytest.raises(InputError, match="unknown views"):
+        evaluate(ex, vol, exclude={"side": [1]}, reference_repeats=0)
+
+
 @settings(max_examples=25, deadline=None)
 @given(st.tuples(*(st.integers(1, 7),) * 3), st.sampled_from(["front", "right", "top"]),
        st.one_of(st.none(), st.integers(1, 8)))

@@ -22,7 +22,6 @@ import json
 import sys
 import time
 from pathlib import Path
-import dataclasses
 from typing import Any
 
 import numpy as np
@@ -35,10 +34,9 @@ from clsolid.gallery import SIZES, gallery_exemplar, gallery_info, gallery_names
 from clsolid.metrics._common import jsonable
 from clsolid.metrics.symmetry import AXIS_PAIRS
 from clsolid.core.views import VIEW_SETS
-from clsolid.ml.params import MLParams
-from clsolid.search.params import SearchParams
+from clsolid.api import inserted_slices, slice_plan
 from clsolid.preview import render_preview
-from clsolid.core.slices import inserted_depths, preview_depths
+from clsolid.core.slices import preview_depths
 from quality_ml import parse_setting  # beside this script (tools/ is on the path when it runs)
 
 VIEWS = metrics.VIEWS
@@ -83,20 +81,10 @@ def copy_chance(exemplar: np.ndarray, side: int) -> float:
     return float(metrics.match_counts(window, exemplar[:half]).max() / window[0].size)
 
 
-def method_params(res: Any) -> MLParams | SearchParams:
-    """A result's parameters, as its method's parameter class (both say where its ``+in``
-    or anchor slices are: clsolid.core.slices)."""
-    if res.params["method"] == "ml":
-        return MLParams.from_dict(res.params)
-    names = {f.name for f in dataclasses.fields(SearchParams)}
-    return SearchParams(**{k: v for k, v in res.params.items() if k in names})
-
-
 def inserted(res: Any) -> dict[str, np.ndarray]:
     """Depths of the ``+in`` (or anchor) slices of every view of a result (none for an
     unconstrained view)."""
-    depths = inserted_depths(res.volume.shape, method_params(res))
-    return {view: depths.get(view, np.zeros(0, int)) for view in VIEWS}
+    return inserted_slices(res.params, res.volume.shape)
 
 
 def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
@@ -104,8 +92,9 @@ def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
     params = res.params
     vol, ex = level_indices(res)
     constrained = VIEW_SETS[params["views"]]
-    report = metrics.evaluate(ex, vol, views=VIEWS, constrained=constrained,
-                              reference_repeats=REFERENCE_REPEATS, rng=0)
+    slices = inserted(res)
+    report = metrics.evaluate(ex, vol, views=VIEWS, constrained=constrained,  # +in copies would flatter
+                              reference_repeats=REFERENCE_REPEATS, rng=0, exclude=slices)
     scores = {v: {key: None for key, _ in SCORES} for v in VIEWS}
     for row in report["summary"]:
         if row["metric"] in scores[row["view"]]:
@@ -113,7 +102,6 @@ def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
     pairs = [(0, 2)] if params["views"] == 2 else AXIS_PAIRS
     mirror = metrics.mirror_correlations(vol, pairs)
     copy = metrics.max_copy_fraction(vol, ex, VIEWS)
-    slices = inserted(res)
     out: dict[str, Any] = {
         "seconds": seconds, "constrained": list(constrained), "scores": scores,
         "mirror": mirror, "mirror_max": max((r for r in mirror.values() if np.isfinite(r)), default=None),
@@ -194,7 +182,8 @@ def markdown(rows: dict[str, dict], settings: dict) -> str:
         f"device {settings['device']}.",
         "",
         "Scores (F/R/T = front/right/top view): 0 = as close as two halves of the exemplar, 1 = no "
-        "structure; – = not measurable for this exemplar. Phase err: largest phase-fraction error, "
+        "structure; – = not measurable for this exemplar; each on 16 slices of its view away from "
+        "the view's +in (or anchor) slices, which start as exemplar copies. Phase err: largest phase-fraction error, "
         "percentage points. Mirror: correlation with the x↔z mirror after removing each y-plane's "
         "mean (the largest over axis pairs with 3 views), and in brackets the level an isotropic "
         "material with the exemplar's autocorrelation would give (a voxel near the plane z = x is "
@@ -236,7 +225,7 @@ def montage(path: Path, rows: list[np.ndarray]) -> None:
 def montage_row(name: str, res: Any) -> np.ndarray:
     """The exemplar beside a front, right and top slice, each away from the ``+in`` (or
     anchor) slices."""
-    params = method_params(res)
+    params = slice_plan(res.params)
     ml = res.params["method"] == "ml"  # a search method's volume holds values, not level indices
     exemplar, volume = (res.exemplar_labels, res.labels) if ml else (res.exemplar, res.volume)
     return render_preview(exemplar, volume, depths=preview_depths(volume.shape, params),

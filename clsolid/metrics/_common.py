@@ -94,7 +94,7 @@ def check_views(views: Any, name: str, *, allow_empty: bool = False) -> tuple[st
     return tuple(dict.fromkeys(items))
 
 
-def view_slices(volume: Any, view: str, max_slices: int | None = None) -> np.ndarray:
+def view_slices(volume: Any, view: str, max_slices: int | None = None, exclude: Any = ()) -> np.ndarray:
     """The slices of a ``(Z, Y, X)`` volume seen from one view, as an ``(n, rows, cols)`` stack.
 
     Parameters
@@ -108,6 +108,9 @@ def view_slices(volume: Any, view: str, max_slices: int | None = None) -> np.nda
     max_slices : int or None
         At most this many slices, evenly spaced: slice ``i`` of ``k`` is the one at
         ``floor((i + 0.5) * n / k)`` (the centres of ``k`` equal blocks). None: all.
+    exclude : sequence of int
+        Slice indices to leave out (for example a synthesis's ``+in`` slices, which are
+        exemplar copies); the slices are then chosen, as above, among the others.
 
     Returns
     -------
@@ -119,19 +122,32 @@ def view_slices(volume: Any, view: str, max_slices: int | None = None) -> np.nda
         raise InputError(f"view={view!r} must be one of {', '.join(VIEWS)}")
     max_slices = check_int(max_slices, "max_slices", 1, allow_none=True)
     axis = {"front": 0, "right": 2, "top": 1}[view]
-    idx = slice_indices(vol.shape[axis], max_slices)
+    idx = slice_indices(vol.shape[axis], max_slices, exclude)
     if view == "front":
-        return vol if len(idx) == vol.shape[0] else vol[idx]
+        return vol if np.array_equal(idx, np.arange(vol.shape[0])) else vol[idx]
     if view == "right":
         return np.ascontiguousarray(np.transpose(vol[:, :, idx], (2, 1, 0)))
     return np.ascontiguousarray(np.transpose(vol[:, idx, :], (1, 0, 2)))
 
 
-def slice_indices(n: int, max_slices: int | None) -> np.ndarray:
-    """Indices of ``min(n, max_slices)`` evenly spaced slices among ``n`` (all when None)."""
-    if max_slices is None or max_slices >= n:
-        return np.arange(n)
-    return ((np.arange(max_slices) + 0.5) * n / max_slices).astype(np.intp)
+def slice_indices(n: int, max_slices: int | None, exclude: Any = ()) -> np.ndarray:
+    """Indices of ``min(m, max_slices)`` evenly spaced slices among the ``m`` of ``0..n-1``
+    not in *exclude* (all of those when None).
+
+    Raises
+    ------
+    InputError
+        An index of *exclude* outside ``0..n-1``, or every slice excluded.
+    """
+    skip = np.unique(np.asarray(exclude, dtype=np.intp).ravel())
+    if skip.size and (skip[0] < 0 or skip[-1] >= n):
+        raise InputError(f"slices to exclude must lie in 0..{n - 1}; got {skip.tolist()}")
+    kept = np.setdiff1d(np.arange(n), skip)
+    if kept.size == 0:
+        raise InputError(f"every one of the {n} slices is excluded; nothing is left to measure")
+    if max_slices is None or max_slices >= kept.size:
+        return kept
+    return kept[((np.arange(max_slices) + 0.5) * kept.size / max_slices).astype(np.intp)]
 
 
 def smoothed_probabilities(counts: np.ndarray, pseudo: float = PSEUDO_COUNT) -> np.ndarray:

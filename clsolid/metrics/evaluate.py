@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -24,7 +25,8 @@ MIN_VOLUME_SIDE = 8
 
 def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any = DEFAULT_CONSTRAINED,
              levels: int | None = None, max_slices: int | None = 16, rng: Any = 0,
-             reference_repeats: int = 5, periodic: bool = True) -> dict[str, Any]:
+             reference_repeats: int = 5, periodic: bool = True,
+             exclude: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """Compare a volume's slices with the exemplar, view by view, with reference scales.
 
     Parameters
@@ -51,6 +53,10 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
     periodic : bool
         Whether the volume wraps around (the engine's volumes do); used by the
         orientation and fringe analyses at the slices' borders.
+    exclude : mapping of view name to slice indices, optional
+        Slices each view leaves out before choosing its ``max_slices``: a synthesis's
+        ``+in`` (or anchor) slices, which start as exemplar copies and would flatter
+        their view's scores (``clsolid evaluate`` reads them from the sidecar).
 
     Returns
     -------
@@ -82,8 +88,9 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
     repeats = check_int(reference_repeats, "reference_repeats", 0)
     if repeats == 1:
         raise InputError("reference_repeats=1 cannot measure a spread; use 0 (no references) or >= 2")
+    excluded = _check_exclude(exclude)
     gen = np.random.default_rng(rng)
-    stacks = {v: view_slices(vol, v, max_slices).astype(np.float64) for v in views}
+    stacks = {v: view_slices(vol, v, max_slices, excluded.get(v, ())).astype(np.float64) for v in views}
     setup = make_setup(ex, (float(vol.min()), float(vol.max())), [s.shape[1:] for s in stacks.values()],
                        periodic=bool(periodic), levels=levels, rng=gen)
     families, skipped = make_families(setup)
@@ -95,11 +102,13 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
         key = (stack.shape[1:], min(len(stack), CEILING_SLICES))
         if key not in ceilings:
             ceilings[key] = _ceilings(families, setup, ex_features, key, gen, repeats)
-        report_views[view] = _view_report(view, vol.shape, stack, max_slices, view in constrained, families,
-                                          setup, ex_features, floors, ceilings[key])
+        report_views[view] = _view_report(view, vol.shape, stack, max_slices, excluded.get(view, ()),
+                                          view in constrained, families, setup, ex_features, floors,
+                                          ceilings[key])
     report = {
         "format": "clsolid-metrics", "version": FORMAT_VERSION,
-        "settings": _settings(setup, views, constrained, max_slices, rng, repeats, skipped),
+        "settings": {**_settings(setup, views, constrained, max_slices, rng, repeats, skipped),
+                     "excluded_slices": {v: sorted(int(i) for i in d) for v, d in excluded.items()}},
         "exemplar": {"shape": list(ex.shape), "stats": first_order_stats(setup.grey(ex))},
         "volume": {"shape": list(vol.shape), "dtype": str(vol.dtype)},
         "views": report_views,
@@ -137,7 +146,19 @@ def _ceilings(families: list[Family], setup: Setup, ex_features: dict, key: tupl
     return out
 
 
-def _view_report(view: str, shape: tuple, stack: np.ndarray, max_slices: int | None,
+def _check_exclude(exclude: Mapping[str, Any] | None) -> dict[str, Any]:
+    """*exclude* as a dict of view name to indices (checked against the volume in view_slices)."""
+    if exclude is None:
+        return {}
+    if not isinstance(exclude, Mapping):
+        raise InputError(f"exclude must map view names to slice indices, got {type(exclude).__name__}")
+    unknown = [v for v in exclude if v not in VIEWS]
+    if unknown:
+        raise InputError(f"exclude names unknown views {unknown}; views are {', '.join(VIEWS)}")
+    return {v: np.asarray(d, dtype=np.intp).ravel() for v, d in exclude.items()}
+
+
+def _view_report(view: str, shape: tuple, stack: np.ndarray, max_slices: int | None, exclude: Any,
                  is_constrained: bool, families: list[Family], setup: Setup, ex_features: dict,
                  floors: dict, ceilings: dict) -> dict:
     """Everything measured on one view's slices, each distance with its floor and ceiling."""
@@ -146,7 +167,7 @@ def _view_report(view: str, shape: tuple, stack: np.ndarray, max_slices: int | N
         "constrained": is_constrained,
         "label": f"{view} ({'constrained' if is_constrained else 'unconstrained'})",
         "slice_axis": "zyx"[axis],
-        "slice_indices": slice_indices(shape[axis], max_slices),
+        "slice_indices": slice_indices(shape[axis], max_slices, exclude),
         "slice_shape": list(stack.shape[1:]),
         "stats": first_order_stats(setup.grey(stack)),
         "distances": {},
