@@ -26,8 +26,9 @@ _SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order", "ca
                    "specify", "search", "exact_passes", "balance", "insert_spacing")
 #: Options of the search methods that are not parameters of the method (what to report).
 _SEARCH_REPORTS = ("site_map",)
-#: The neighbourhood side each method uses when none is given (ML: the thesis case; WL: ch5_np_common).
-DEFAULT_NEIGHBORHOOD = {"ml": 9, "wl": 7, "kopf": 7, "chen-wang": 7}
+#: The neighbourhood side each method uses when none is given (ML: 11, measured on the gallery; the
+#: thesis case is 9; the search methods: ch5_np_common's 7).
+DEFAULT_NEIGHBORHOOD = {"ml": MLParams().neighborhood, "wl": 7, "kopf": 7, "chen-wang": 7}
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
                "insert_spacing",
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
@@ -200,7 +201,8 @@ def synthesize(
         Thesis and paper tags are accepted as aliases (case-insensitive).
     neighborhood : int, optional
         Odd side of the full-square window in each view (3 to 31; thesis 7, 9 or 11).
-        Default: 9 for ``"ml"`` (the thesis case), 7 for ``"wl"`` (``ch5_np_common``).
+        Default: 11 for ``"ml"`` (measured on the gallery; the thesis case is 9), 7 for the
+        search methods (``ch5_np_common``).
     scales : int
         Number of decimation scales (each halves the exemplar and the block).
     views : {2, 3}

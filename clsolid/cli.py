@@ -62,7 +62,7 @@ def _add_synth(sub) -> None:
     p.add_argument("--heuristic", default=d.heuristic,
                    help=f"view combination: {', '.join(HEURISTICS)} or a thesis/paper tag (default %(default)s)")
     p.add_argument("--neighborhood", type=int, default=None,
-                   help=f"odd window size per view (default {d.neighborhood} for ml, 7 for wl)")
+                   help=f"odd window size per view (default {d.neighborhood} for ml; 7 for wl, kopf and chen-wang)")
     p.add_argument("--iterations", type=int, default=10, help="wl: passes per scale (default %(default)s)")
     p.add_argument("--inner", type=int, default=4,
                    help="wl: most searches per voxel and pass, the centre included after the first "

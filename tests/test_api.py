@@ -53,9 +53,10 @@ def test_bandwidth_is_a_fraction_of_silverman_per_scale(brick_labels):
         assert params.bandwidth_factor == factors
         for level in range(3):
             ex = scale_exemplar(brick_labels, level, params.pyramid)
-            n = (ex.shape[0] - 8) * (ex.shape[1] - 8)
+            k = params.neighborhood
+            n = (ex.shape[0] - k + 1) * (ex.shape[1] - k + 1)
             h = build_scale(brick_labels, (16, 16, 16), params, level).bandwidth
-            assert h == pytest.approx(factors[level] * silverman(float(ex.std()), n, 81), rel=1e-12)
+            assert h == pytest.approx(factors[level] * silverman(float(ex.std()), n, k * k), rel=1e-12)
     fixed = MLParams(bandwidth=2.0)
     assert fixed.bandwidth == (2.0, 2.0, 2.0) and fixed.bandwidth_factor is None
     assert MLParams(scales=1).bandwidth_factor == (0.2,)

@@ -31,7 +31,8 @@ from .model import ScaleModel
 from .reference import new_temperature
 
 #: Most neighbour terms (voxels x neighbours in the union of the views) a replayed sweep may
-#: sum: 2^30, a 9 x 9 run up to about 190^3 (at 128^3, 3.2e8 terms: a few seconds a sweep).
+#: sum: 2^30, an 11 x 11 run up to about 167^3, 9 x 9 to 190^3 (at 128^3, 9 x 9: 3.2e8 terms, a few
+#: seconds a sweep).
 REPLAY_TERMS = 2**30
 
 

@@ -85,7 +85,7 @@ class MLParams:
     See :func:`clsolid.synthesize` for the meaning of each field.
     """
 
-    neighborhood: int = 9
+    neighborhood: int = 11
     scales: int = 3
     pyramid: str = "binomial"
     views: int = 2
