@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from typing import TYPE_CHECKING, Callable
 
@@ -53,8 +52,7 @@ def slice_plan(params: dict) -> "MLParams | SearchParams":
         return MLParams.from_dict(params)
     from .search.params import SearchParams
 
-    names = {f.name for f in dataclasses.fields(SearchParams)}
-    return SearchParams(**{k: v for k, v in params.items() if k in names})
+    return SearchParams.from_dict(params)
 
 
 def inserted_slices(params: dict, shape: tuple[int, int, int]) -> dict[str, np.ndarray]:

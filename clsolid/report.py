@@ -104,14 +104,15 @@ def _run_evaluation(args: argparse.Namespace) -> None:
         raise InputError(f"--max-slices={args.max_slices} must be >= 0 (0 = all slices)")
     exemplar = load_exemplar(args.exemplar)
     volume = load_volume(args.volume)
+    sidecar, meta = read_sidecar(args.volume)
     levels = args.levels
     if levels is None:
-        exemplar, levels, note = like_with_like(exemplar, args.volume)
+        exemplar, levels, note = like_with_like(exemplar, sidecar, meta)
         if note:
             print(note)
     exclude: dict = {}
     if not args.keep_inserted:
-        exclude, note = inserted_from_sidecar(args.volume, volume.shape)
+        exclude, note = inserted_from_sidecar(sidecar, meta, volume.shape)
         if note:
             print(note)
     report = evaluate(exemplar, volume, views=args.views, constrained=args.constrained or (),
@@ -165,8 +166,20 @@ def load_volume(path: Any) -> np.ndarray:
     return arr
 
 
-def like_with_like(exemplar: np.ndarray, volume_path: Any) -> tuple[np.ndarray, int | None, str]:
-    """Put the exemplar in the units of a ``clsolid synth`` volume, read from its JSON sidecar.
+def read_sidecar(volume_path: Any) -> tuple[pathlib.Path, dict | None]:
+    """The path of a ``clsolid synth`` volume's JSON sidecar and what it holds (None when
+    there is none or it cannot be read as JSON)."""
+    sidecar = pathlib.Path(volume_path).with_suffix(".json")
+    try:
+        return sidecar, json.loads(sidecar.read_text())
+    except (OSError, ValueError):
+        return sidecar, None
+
+
+def like_with_like(exemplar: np.ndarray, sidecar: pathlib.Path, meta: dict | None
+                   ) -> tuple[np.ndarray, int | None, str]:
+    """Put the exemplar in the units of a ``clsolid synth`` volume, from its sidecar
+    (:func:`read_sidecar`).
 
     A volume of level means is compared after quantising both into the synthesis's
     levels; a volume of level indices against the exemplar's indices; a volume of the
@@ -180,11 +193,9 @@ def like_with_like(exemplar: np.ndarray, volume_path: Any) -> tuple[np.ndarray, 
     """
     from .exemplar import level_map
 
-    sidecar = pathlib.Path(volume_path).with_suffix(".json")
     try:
-        meta = json.loads(sidecar.read_text())
         written, exact, levels = meta["written"], bool(meta["values_exact"]), meta["params"]["levels"]
-    except (OSError, ValueError, KeyError, TypeError):
+    except (KeyError, TypeError):
         return exemplar, None, ""
     if written == "indices":
         return (level_map(exemplar, levels).labels, None,
@@ -194,8 +205,9 @@ def like_with_like(exemplar: np.ndarray, volume_path: Any) -> tuple[np.ndarray, 
     return exemplar, int(levels), f"{sidecar}: level means of {levels} levels; both quantised to {levels} levels"
 
 
-def inserted_from_sidecar(volume_path: Any, shape: tuple) -> tuple[dict, str]:
-    """The ``+in`` (or anchor) slices of a ``clsolid synth`` volume, from its JSON sidecar.
+def inserted_from_sidecar(sidecar: pathlib.Path, meta: dict | None, shape: tuple) -> tuple[dict, str]:
+    """The ``+in`` (or anchor) slices of a ``clsolid synth`` volume, from its sidecar
+    (:func:`read_sidecar`).
 
     Returns
     -------
@@ -206,13 +218,11 @@ def inserted_from_sidecar(volume_path: Any, shape: tuple) -> tuple[dict, str]:
     """
     from .api import inserted_slices
 
-    sidecar = pathlib.Path(volume_path).with_suffix(".json")
     try:
-        meta = json.loads(sidecar.read_text())
         params = dict(meta["params"])
         recorded = tuple(params.get("shape") or ())
         depths = inserted_slices(params, shape) if recorded in ((), tuple(shape)) else {}
-    except (OSError, ValueError, KeyError, TypeError, ClsolidError):
+    except (ValueError, KeyError, TypeError, ClsolidError):
         return {}, ""
     depths = {v: d for v, d in depths.items() if d.size}
     if not depths:

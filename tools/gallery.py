@@ -81,18 +81,12 @@ def copy_chance(exemplar: np.ndarray, side: int) -> float:
     return float(metrics.match_counts(window, exemplar[:half]).max() / window[0].size)
 
 
-def inserted(res: Any) -> dict[str, np.ndarray]:
-    """Depths of the ``+in`` (or anchor) slices of every view of a result (none for an
-    unconstrained view)."""
-    return inserted_slices(res.params, res.volume.shape)
-
-
 def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
     """Every number of the gallery for one synthesis result (phase fractions if ``categorical``)."""
     params = res.params
     vol, ex = level_indices(res)
     constrained = VIEW_SETS[params["views"]]
-    slices = inserted(res)
+    slices = inserted_slices(res.params, res.volume.shape)  # the +in (or anchor) slices of every view
     report = metrics.evaluate(ex, vol, views=VIEWS, constrained=constrained,  # +in copies would flatter
                               reference_repeats=REFERENCE_REPEATS, rng=0, exclude=slices)
     scores = {v: {key: None for key, _ in SCORES} for v in VIEWS}

@@ -216,5 +216,10 @@ class SearchParams:
         """Anchor slices a view gets: none with ``insert_spacing=0``, else as the spacing says (None)."""
         return 0 if self.insert_spacing == 0 else None
 
+    @classmethod
+    def from_dict(cls, d: dict) -> "SearchParams":
+        """The parameters recorded by :meth:`to_dict` (e.g. ``SynthesisResult.params``); other keys are ignored."""
+        return cls(**{k: d[k] for k in cls.__dataclass_fields__ if k in d})
+
     def to_dict(self) -> dict:
         return asdict(self)
