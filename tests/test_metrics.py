@@ -17,7 +17,8 @@ from clsolid.metrics import (autocorrelation, autocorrelation_distance, chord_le
                              dominant_orientation_deg, evaluate, first_order_stats, histogram_distance,
                              lineal_path, orientation_histogram, patch_distance, quantise,
                              structure_tensor_orientation, symmetric_kl, trace_fringes,
-                             two_point_correlation, view_slices, volume_fractions, wasserstein_1d)
+                             two_point_cluster, two_point_correlation, view_slices, volume_fractions,
+                             wasserstein_1d)
 from clsolid.metrics.orientation import bin_centres_deg
 from clsolid.metrics.references import exemplar_halves, shuffled_stack, size_factor
 
@@ -295,6 +296,55 @@ def test_s2_of_stripes_matches_the_analytic_triangle():
     np.testing.assert_allclose(two_point_correlation(labels, 1, 0, 16), width / period)
 
 
+def test_c2_of_stripes_stops_at_each_stripe():
+    period, width = 8, 3
+    labels = np.tile((np.arange(256) % period < width).astype(int), (64, 1))
+    c2 = two_point_cluster(labels, phase=1, axis=1, max_lag=16)
+    r = np.arange(17)
+    np.testing.assert_allclose(c2, np.maximum(0, width - r) / period, atol=0.01)  # S2 comes back; C2 does not
+    np.testing.assert_allclose(two_point_cluster(labels, 1, 0, 16), width / period)  # one stripe, one cluster
+
+
+def _c2_by_pairs(image: np.ndarray, phase: int, r: int) -> float:
+    """C2 of one image at a horizontal lag r, pair by pair, from its own 8-connected labels."""
+    cluster, _ = ndi.label(image == phase, structure=np.ones((3, 3)))
+    rows, cols = image.shape
+    same = [cluster[i, j] > 0 and cluster[i, j] == cluster[i, j + r] for i in range(rows) for j in range(cols - r)]
+    return float(np.mean(same))
+
+
+def test_c2_of_a_stack_equals_each_image_alone():
+    rng = np.random.default_rng(8)
+    stack = (ndi.uniform_filter(rng.random((3, 20, 24)), (1, 3, 3)) > 0.52).astype(int)
+    c2 = two_point_cluster(stack, 1, 1, 6)
+    want = [np.mean([_c2_by_pairs(img, 1, r) for img in stack]) for r in range(7)]
+    np.testing.assert_allclose(c2, want, atol=1e-12)  # clusters never join across images
+    np.testing.assert_allclose(two_point_cluster(stack, 0, 0, 6),
+                               two_point_cluster(np.swapaxes(stack, 1, 2), 0, 1, 6), atol=1e-12)
+    assert np.all(c2 <= two_point_correlation(stack, 1, 1, 6) + 1e-12)
+
+
+def test_c2_tells_a_broken_network_from_a_connected_one():
+    """Scatter a third of a grain-boundary network's pixels: S2 at 8 pixels barely moves (it is
+    near the fraction squared either way); C2 there falls to a third (the network is broken)."""
+    from clsolid.gallery import gallery_exemplar
+
+    net = (gallery_exemplar("grains", 128) > 0).astype(int)
+    phase = int(np.argmin(np.bincount(net.ravel())))  # the boundaries, the minority phase
+    rng = np.random.default_rng(0)
+    broken = net.copy()
+    on = np.flatnonzero(net.ravel() == phase)
+    off = np.flatnonzero(net.ravel() != phase)
+    moved = rng.choice(on, on.size // 3, replace=False)
+    broken.ravel()[moved] = broken.ravel()[off[0]]
+    broken.ravel()[rng.choice(off, moved.size, replace=False)] = phase
+    s2 = [two_point_correlation(img, phase, 1, 8) for img in (net, broken)]
+    c2 = [two_point_cluster(img, phase, 1, 8) for img in (net, broken)]
+    np.testing.assert_allclose(c2[0], s2[0])  # one connected network: every pair is in it
+    assert abs(s2[1][8] - s2[0][8]) < 0.1 * s2[0][8]
+    assert c2[1][8] < 0.5 * c2[0][8]
+
+
 def test_random_phases_give_the_independent_answers():
     phi = 0.3
     labels = (np.random.default_rng(5).random((64, 256, 256)) < phi).astype(int)
@@ -396,7 +446,7 @@ def test_few_phase_exemplars_get_phase_metrics():
     vol = (gaussian_field(rng, (32, 32, 32), 2.0) > 0.3).astype(np.uint8)
     report = evaluate(ex, vol, views=["front"], reference_repeats=3)
     view = report["views"]["front"]
-    assert {"volume_fraction_tv", "s2_l2", "lineal_path_l2", "chord_length_w1"} <= set(view["distances"])
+    assert {"volume_fraction_tv", "s2_l2", "c2_l2", "lineal_path_l2", "chord_length_w1"} <= set(view["distances"])
     assert view["phases"]["phase_values"] == [0.0, 1.0]
     assert view["distances"]["chord_length_w1"]["informative"]
     assert view["distances"]["chord_length_w1"]["score"] < 0.5

@@ -2,8 +2,8 @@
 
 Grows one cube per exemplar and seed, then measures, with clsolid.metrics: the largest
 phase-fraction error (percentage points, categorical exemplars), the calibrated
-histogram, patch, autocorrelation and (categorical) S2 scores in the front, right and
-top views (0: as close as two halves of the exemplar, 1: no structure), the mirror
+histogram, patch, autocorrelation and (categorical) S2 and C2 (two-point cluster) scores in
+the front, right and top views (0: as close as two halves of the exemplar, 1: no structure), the mirror
 correlation (x <-> z with 2 views; every pair of axes with 3), the largest fraction of
 any slice identical to a shifted window of the exemplar, and the time. Writes, in OUTDIR:
 gallery.md (a table and how many exemplars meet each target), gallery.json (every
@@ -41,7 +41,8 @@ from quality_ml import parse_setting  # beside this script (tools/ is on the pat
 
 VIEWS = metrics.VIEWS
 #: The calibrated scores reported per view: (key in clsolid.metrics.evaluate, column title).
-SCORES = (("histogram_kl", "hist"), ("patch_sw", "patch"), ("autocorrelation_l2", "autocorr"), ("s2_l2", "S2"))
+SCORES = (("histogram_kl", "hist"), ("patch_sw", "patch"), ("autocorrelation_l2", "autocorr"), ("s2_l2", "S2"),
+          ("c2_l2", "C2"))
 #: Targets of issue 10: (key, label, limit, whether the value must stay strictly below it).
 TARGETS = (
     ("phase_error_pp", "every phase within 3 pp", 3.0, False),

@@ -18,7 +18,7 @@ from .fringes import Fringes, fringe_distances, trace_fringes
 from .orientation import (OrientationField, dominant_orientation_deg, orientation_distance,
                           orientation_histogram, structure_tensor_orientation)
 from .patches import patch_distance
-from .phases import chord_lengths, lineal_path, two_point_correlation, volume_fractions
+from .phases import chord_lengths, lineal_path, two_point_cluster, two_point_correlation, volume_fractions
 from .symmetry import (CopyMatch, match_counts, max_copy_fraction, mirror_chance, mirror_correlation,
                        mirror_correlations)
 
@@ -27,7 +27,7 @@ __all__ = [
     "symmetric_kl", "wasserstein_1d", "autocorrelation", "autocorrelation_distance",
     "structure_tensor_orientation", "OrientationField", "orientation_histogram",
     "dominant_orientation_deg", "orientation_distance", "trace_fringes", "Fringes",
-    "fringe_distances", "patch_distance", "volume_fractions", "two_point_correlation",
+    "fringe_distances", "patch_distance", "volume_fractions", "two_point_correlation", "two_point_cluster",
     "lineal_path", "chord_lengths", "mirror_correlation", "mirror_correlations", "mirror_chance", "max_copy_fraction",
     "CopyMatch", "match_counts",
 ]

@@ -207,12 +207,13 @@ VIEW_AXES = {"front": ("y", "x"), "right": ("y", "z"), "top": ("z", "x")}
 
 
 class PhaseFamily(Family):
-    """Few-phase descriptors: volume fractions, S2, lineal path and chord lengths."""
+    """Few-phase descriptors: volume fractions, S2, the cluster function C2, lineal path and chord lengths."""
 
     name = "phases"
     distances = (
         Distance("volume_fraction_tv", "volume fractions, total variation", "fraction", "noise"),
         Distance("s2_l2", "two-point correlation S2, RMS difference", "probability", "shuffle"),
+        Distance("c2_l2", "connectedness C2(r)/C2(0), RMS difference", "probability", "shuffle"),
         Distance("lineal_path_l2", "lineal path, RMS difference", "probability", "shuffle"),
         Distance("chord_length_w1", "chord-length distributions, mean Wasserstein-1", "pixels", "shuffle"),
     )
@@ -220,11 +221,15 @@ class PhaseFamily(Family):
     def features(self, stack, periodic):
         labels = phases.to_labels(self.setup.grey(stack), self.setup.phase_values)
         n = len(self.setup.phase_values)
-        feats = {"fractions": phases.volume_fractions(labels, n), "s2": {}, "lineal": {}, "chords": {}}
+        feats = {"fractions": phases.volume_fractions(labels, n), "s2": {}, "c2": {}, "lineal": {}, "chords": {}}
         for axis in (0, 1):
             lag = self.setup.max_lag
             for p in range(n):
                 feats["s2"][p, axis] = phases.two_point_correlation(labels, p, axis, lag)
+                c2 = phases.two_point_cluster(labels, p, axis, lag)
+                # Conditional on the first point (C2(0) is the fraction): a fraction that differs
+                # between the exemplar's halves would otherwise hide whether the phase is connected.
+                feats["c2"][p, axis] = c2 / c2[0] if c2[0] > 0 else c2
                 feats["lineal"][p, axis] = phases.lineal_path(labels, p, axis, lag)
                 feats["chords"][p, axis] = phases.chord_lengths(labels, p, axis)
         return feats
@@ -232,6 +237,7 @@ class PhaseFamily(Family):
     def compare(self, fa, fb):
         tv = 0.5 * float(np.abs(fa["fractions"] - fb["fractions"]).sum())
         return {"volume_fraction_tv": tv, "s2_l2": _curves_rms(fa["s2"], fb["s2"]),
+                "c2_l2": _curves_rms(fa["c2"], fb["c2"]),
                 "lineal_path_l2": _curves_rms(fa["lineal"], fb["lineal"]),
                 "chord_length_w1": _chords_w1(fa["chords"], fb["chords"])}
 
@@ -247,6 +253,7 @@ class PhaseFamily(Family):
             out["curves"].append({
                 "phase": p, "axis": axis, "volume_axis": names[axis],
                 "s2": {"exemplar": s2a, "volume": fb["s2"][p, axis]},
+                "c2": {"exemplar": fa["c2"][p, axis], "volume": fb["c2"][p, axis]},
                 "lineal_path": {"exemplar": fa["lineal"][p, axis], "volume": fb["lineal"][p, axis]},
                 "mean_chord": {"exemplar": _weighted_mean(*ca), "volume": _weighted_mean(*cb)},
             })
