@@ -89,17 +89,19 @@ def project_bias(scores: np.ndarray, target: np.ndarray, start: np.ndarray | Non
     s_on = s[:, on] - s[:, on].max(axis=1, keepdims=True)  # the off labels' mass is negligible
     ref = int(np.argmax(pi))
 
-    def objective(x: np.ndarray) -> float:
+    def objective(x: np.ndarray) -> tuple[float, np.ndarray]:
+        """F at *x*, and the voxels' laws there (the next step's, if *x* is taken)."""
         z = s_on + x
-        m = z.max(axis=1)
-        return float(np.mean(m + np.log(np.exp(z - m[:, None]).sum(axis=1))) - pi @ x)
+        e = np.exp(z - z.max(axis=1, keepdims=True))
+        total = e.sum(axis=1, keepdims=True)
+        f = float(np.mean(z.max(axis=1) + np.log(total[:, 0])) - pi @ x)
+        return f, e / total
 
     # Near-one-hot laws move a fraction in steps of one voxel: aim no finer than two.
     tol = max(tol, 2.0 / s.shape[0])
     x = np.clip(b[on] - b[on][ref], -MAX_BIAS, MAX_BIAS)
-    f = objective(x)
+    f, p = objective(x)
     for _ in range(max_iter):
-        p = softmax(s_on + x)
         q = p.mean(axis=0)
         grad = q - pi
         stuck = ((x >= MAX_BIAS) & (grad < 0)) | ((x <= -MAX_BIAS) & (grad > 0))
@@ -116,13 +118,13 @@ def project_bias(scores: np.ndarray, target: np.ndarray, start: np.ndarray | Non
         t = 1.0
         while t > 1e-6:
             cand = np.clip(x + t * step, -MAX_BIAS, MAX_BIAS)
-            f_cand = objective(cand)
+            f_cand, p_cand = objective(cand)
             if f_cand <= f + 1e-4 * (grad @ (cand - x)):
                 break
             t *= 0.5
         if t <= 1e-6:
             break  # no descent left: as close as it gets
-        x, f = cand, f_cand
+        x, f, p = cand, f_cand, p_cand
     b[on] = x
     return b
 
