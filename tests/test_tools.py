@@ -41,10 +41,12 @@ def test_gallery_writes_table_json_and_montage(capsys, device, tmp_path, tool):
     rows = [line for line in table.splitlines() if line.startswith("| ") and "exemplar" not in line]
     assert [r.split("|")[1].strip() for r in rows] == ["porous80", "hrtem"]
     assert "every phase within 3 pp: " in table and "mirror <= 0.1: " in table
+    assert "connectedness C2 <= 0.3 (not an issue target): " in table
     report = json.loads((tmp_path / "gallery.json").read_text())
     run = report["runs"]["porous80"][0]
     assert run["phase_error_pp"] >= 0 and report["runs"]["hrtem"][0]["phase_error_pp"] is None
     assert set(run["scores"]) == {"front", "right", "top"} and set(run["mirror"]) == {"zx"}
+    assert "c2_l2" in run["scores"]["front"]
     assert 0 <= run["copy"]["fraction"] <= 1 and run["seconds"] > 0
     with Image.open(tmp_path / "montage.png") as png:
         width, height = png.size
