@@ -69,7 +69,7 @@ def two_point_cluster(labels: Any, phase: int, axis: int, max_lag: int) -> np.nd
 
     ``C2 <= S2``: the two agree where the phase is one connected network, and C2 falls to 0
     within a few pixels where the phase is scattered specks or small grains (Torquato,
-    *Random Heterogeneous Materials*, §2.5). So it tells a thin connected network from a
+    *Random Heterogeneous Materials*). So it tells a thin connected network from a
     broken one with the same fraction and much the same S2. Clusters are cut by the image's
     edges (no wrap-around), in the exemplar and the slices alike.
     """

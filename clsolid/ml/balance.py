@@ -92,10 +92,10 @@ def project_bias(scores: np.ndarray, target: np.ndarray, start: np.ndarray | Non
     def objective(x: np.ndarray) -> tuple[float, np.ndarray]:
         """F at *x*, and the voxels' laws there (the next step's, if *x* is taken)."""
         z = s_on + x
-        e = np.exp(z - z.max(axis=1, keepdims=True))
+        m = z.max(axis=1, keepdims=True)
+        e = np.exp(z - m)
         total = e.sum(axis=1, keepdims=True)
-        f = float(np.mean(z.max(axis=1) + np.log(total[:, 0])) - pi @ x)
-        return f, e / total
+        return float(np.mean(m + np.log(total)) - pi @ x), e / total
 
     # Near-one-hot laws move a fraction in steps of one voxel: aim no finer than two.
     tol = max(tol, 2.0 / s.shape[0])
