@@ -3,8 +3,9 @@
 Fast checks (32^3, the default 11x11 and 3 scales): phase fractions kept (issue 10's 3
 points; the slow tests check its other targets at 48^3), no x<->z mirror image, and every
 relaxation reproducible by seed. The slow tests also hold kopf, exact and accelerated, to
-issue 11's targets on a subset. The thesis's form is checked too, so that
-these tests are known to fail where the defect is.
+issue 11's targets on a subset, and that a material does not depend on the grey values its
+phases carry (it does today: a strict expected failure). The thesis's form is checked too, so
+that these tests are known to fail where the defect is.
 """
 
 import numpy as np
@@ -153,3 +154,25 @@ def test_issue_11_kopf_targets_at_48(gallery_runs, name, target, search):
     key, limit = KOPF_LIMITS[target]
     value = _value(gallery_runs(name, "kopf", search=search), key)
     assert value <= limit, f"{name}, {search} search: {target} {value:.2f} > {limit}"
+
+
+# --------------------------------------------------------------------------- phases are names, not grey levels
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="composite4's C2 0.60 with the gallery's values, 0.36 with the discs' "
+                                       "and the white particles' values swapped (README, still weak)")
+def test_a_material_does_not_depend_on_the_values_of_its_phases(device):
+    """Which grey value a segmented phase carries is the user's arbitrary choice; the volume's
+    statistics should not depend on it. Today they do: phases are compared as grey levels."""
+    from clsolid.api import inserted_slices
+    from clsolid.metrics import evaluate
+
+    ex = gallery_exemplar("composite4", 64)
+    swapped = np.array([0, 255, 170, 85], np.uint8)[np.searchsorted([0, 85, 170, 255], ex)]
+    scores = []
+    for exemplar in (ex, swapped):
+        res = clsolid.synthesize(exemplar, (48, 48, 48), rng=1, device=device, full_output=True)
+        vol = np.asarray(res.volume)
+        report = evaluate(exemplar, vol, views=["front", "right"], reference_repeats=3, max_slices=16,
+                          exclude=inserted_slices(res.params, vol.shape))
+        scores.append(max(report["views"][v]["distances"]["c2_l2"]["score"] for v in ("front", "right")))
+    assert abs(scores[0] - scores[1]) <= 0.1, f"C2 {scores[0]:.2f} against {scores[1]:.2f} with the values swapped"
