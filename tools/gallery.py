@@ -155,7 +155,7 @@ def summarise(runs: list[dict]) -> dict[str, Any]:
 
 def meets(row: dict, key: str, limit: float, strict: bool) -> bool | None:
     """Whether one exemplar meets one target (None: not measurable or not applicable)."""
-    if key in ("histogram_kl", "patch_sw", "autocorrelation_l2", "c2_l2"):
+    if key in dict(SCORES):  # a per-view score: the worst constrained view
         values = [row["scores"][v][key] for v in row["constrained"]]
         if any(v is None for v in values):
             return None
