@@ -31,8 +31,8 @@ DEFAULT_NEIGHBORHOOD = {"ml": MLParams().neighborhood, "wl": 7, "kopf": 7, "chen
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
                "insert_spacing",
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
-               "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "prune_similar",
-               "prune_sample", "prune_min_weight")
+               "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
+               "prune_similar", "prune_sample", "prune_min_weight")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
 _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
@@ -293,6 +293,13 @@ def synthesize(
         ``"auto"`` (default) prunes categorical exemplars (binary or segmented: their own
         values kept, at most 8 of them) and sums grey ones exactly; the result's ``params``
         say which it took.
+
+        Distance: ``distance="squared"`` compares neighbourhoods and centre values by squared
+        grey-level differences (the thesis); ``"mismatch"`` counts the neighbours whose levels
+        differ (each weighted (1 - t)^2), so that phases are names, not numbers, and the
+        bandwidth is taken in those units (``clsolid.ml.model.phase_sigma``). ``"auto"``
+        (default) counts mismatches on the exemplars the pruned sum takes (categorical, at
+        most 8 values) and squares grey differences; on two levels both are the same.
 
     Returns
     -------

@@ -16,8 +16,8 @@ import time
 from pathlib import Path
 
 from .errors import ClsolidError, DeviceMemoryError, HostMemoryError, InputError, KernelBuildError, NoDeviceError
-from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, HEURISTICS, INHERITED, PYRAMIDS, LIKELIHOODS, RELAXATIONS, SLICE_LAYOUTS,
-                     UPSAMPLING, MLParams)
+from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, DISTANCES, HEURISTICS, INHERITED, PYRAMIDS, LIKELIHOODS,
+                        RELAXATIONS, SLICE_LAYOUTS, UPSAMPLING, MLParams)
 from .presets import PRESETS, Preset, get_preset
 from .search.params import DEFAULT_CANDIDATES, HISTOGRAMS, ORDERS_ALL, RULES, SEARCHES
 from .search.params import METHODS as SEARCH_METHODS
@@ -147,6 +147,10 @@ def _add_synth(sub) -> None:
                    help="the Parzen sum over every exemplar site (exact, the thesis) or over k-coherence "
                         "candidates plus a sample of the other sites (pruned); auto (default): pruned for "
                         "categorical exemplars (at most 8 values, kept), exact for grey ones")
+    p.add_argument("--distance", choices=DISTANCES, default=d.distance,
+                   help="how neighbourhoods differ: squared grey-level differences (squared, the thesis) or the "
+                        "count of differing levels (mismatch: phases are names, not numbers); auto (default): "
+                        "mismatch for categorical exemplars (at most 8 values, kept), squared for grey ones")
     p.add_argument("--prune-similar", type=int, default=d.prune_similar,
                    help="pruned: windows taken per source, itself included (default %(default)s)")
     p.add_argument("--prune-sample", type=int, default=d.prune_sample,
@@ -285,8 +289,8 @@ def _tracker(levels: int, records: list):
 #: Flags that only one method reads: given to the other, they are an error, not ignored.
 _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited",
             "insert_slices", "insert_spacing", "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor",
-            "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "prune_similar",
-            "prune_sample", "prune_min_weight", "tile", "scheduler", "workers", "indices", "track")
+            "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
+            "prune_similar", "prune_sample", "prune_min_weight", "tile", "scheduler", "workers", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram", "candidates",
             "specify", "search", "exact_passes", "site_map", "source_map")
 
@@ -328,7 +332,7 @@ def _ml_options(args) -> dict:
                    initial_temperature=args.initial_temperature, builtin_size=args.builtin_size,
                    relaxation=args.relaxation, anneal_start=args.anneal_start, anneal_cooling=args.anneal_cooling,
                    sweeps=args.sweeps, balance=args.balance, likelihood=args.likelihood,
-                   prune_similar=args.prune_similar, prune_sample=args.prune_sample,
+                   distance=args.distance, prune_similar=args.prune_similar, prune_sample=args.prune_sample,
                    prune_min_weight=args.prune_min_weight)
     if args.tile is not None:
         options["tile"] = args.tile

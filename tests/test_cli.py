@@ -93,6 +93,8 @@ def test_same_seed_same_file(tmp_path, device):
     ([], "likelihood", "exact"),  # brick is grey: auto sums exactly
     (["--likelihood", "pruned", "--prune-similar", "4", "--prune-sample", "32", "--prune-min-weight", "0.1"],
      "likelihood", "pruned"),
+    ([], "distance", "squared"),  # brick is grey: auto squares the differences
+    (["--distance", "mismatch"], "distance", "mismatch"),
 ])
 def test_method_options_reach_the_sidecar(tmp_path, device, argv, key, expected):
     assert main(["synth", "-o", str(tmp_path / "v.npy"), *FAST, "-q", *argv]) == 0

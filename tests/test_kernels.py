@@ -19,12 +19,14 @@ def _pair(device, labels_img, shape, vol, temp, **kw):
     return model, cl_b, ref
 
 
-@pytest.mark.parametrize("k, views", [(3, 2), (5, 3), (7, 2), (11, 2)])
-def test_per_label_log_lcpdf_matches_reference(device, small_labels, k, views):
+@pytest.mark.parametrize("k, views, distance", [(3, 2, "squared"), (5, 3, "squared"), (7, 2, "squared"),
+                                                (11, 2, "squared"), (5, 3, "mismatch"), (11, 2, "mismatch")])
+def test_per_label_log_lcpdf_matches_reference(device, small_labels, k, views, distance):
     shape = (7, 9, 11)
-    model = build_scale(small_labels, shape, MLParams(neighborhood=k, views=views, scales=1), 0)
+    params = dict(neighborhood=k, views=views, scales=1, distance=distance)
+    model = build_scale(small_labels, shape, MLParams(**params), 0)
     vol, temp = random_state(model)
-    model, cl_b, ref = _pair(device, small_labels, shape, vol, temp, neighborhood=k, views=views, scales=1)
+    model, cl_b, ref = _pair(device, small_labels, shape, vol, temp, **params)
     voxels = np.arange(0, vol.size, 3)
     got, want = cl_b.lcpdf(voxels), ref.lcpdf(voxels)
     assert got.shape == want.shape == (views, voxels.size, model.labels.size)
@@ -67,10 +69,12 @@ def test_group_tables_cover_every_site_once(small_labels):
         assert sorted(map(tuple, lanes)) == sorted(map(tuple, want))
 
 
-@pytest.mark.parametrize("heuristic", ["h2-product", "h2-min", "h2-max", "h1-lowest", "h1-highest", "h1-mean"])
-def test_one_icm_step_matches_reference(device, small_labels, heuristic):
+@pytest.mark.parametrize("heuristic, distance", [(h, "squared") for h in ("h2-product", "h2-min", "h2-max", "h1-lowest",
+                                                                          "h1-highest", "h1-mean")]
+                         + [("h2-product", "mismatch"), ("h1-lowest", "mismatch")])
+def test_one_icm_step_matches_reference(device, small_labels, heuristic, distance):
     shape = (6, 8, 10)
-    params = dict(neighborhood=5, views=3, scales=1, heuristic=heuristic)
+    params = dict(neighborhood=5, views=3, scales=1, heuristic=heuristic, distance=distance)
     model = build_scale(small_labels, shape, MLParams(**params), 0)
     vol, temp = random_state(model, seed=2)
     model, cl_b, ref = _pair(device, small_labels, shape, vol, temp, **params)

@@ -78,11 +78,13 @@ def test_exact_kernel_records_the_nearest_site(device, small_labels):
     assert (cl_b.sources()[:, voxels] == ref.sources()[:, voxels]).mean() > 0.98
 
 
-@pytest.mark.parametrize("k, views, similar, sample", [(3, 2, 1, 0), (5, 3, 8, 0), (7, 2, 16, 0), (5, 2, 8, 64),
-                                                      (7, 3, 4, 17)])
-def test_pruned_lcpdf_matches_reference(device, small_labels, k, views, similar, sample):
+@pytest.mark.parametrize("k, views, similar, sample, distance",
+                         [(3, 2, 1, 0, "squared"), (5, 3, 8, 0, "squared"), (7, 2, 16, 0, "squared"),
+                          (5, 2, 8, 64, "squared"), (7, 3, 4, 17, "squared"), (5, 3, 8, 0, "mismatch"),
+                          (7, 2, 4, 17, "mismatch")])
+def test_pruned_lcpdf_matches_reference(device, small_labels, k, views, similar, sample, distance):
     params, model = _model(small_labels, neighborhood=k, views=views, likelihood="pruned", prune_similar=similar,
-                           prune_sample=sample)
+                           prune_sample=sample, distance=distance)
     vol, temp, sources = _state(model, seed=k)
     cl_b, ref = _backends(device, model, params, vol, temp, sources)
     voxels = np.flatnonzero(model.colour.ravel() == 0)
@@ -92,7 +94,7 @@ def test_pruned_lcpdf_matches_reference(device, small_labels, k, views, similar,
     # the new sources: the nearest candidate's (ties aside, the same)
     assert (cl_b.sources()[:, voxels] == ref.sources()[:, voxels]).mean() > 0.98
     exact = ReferenceBackend()
-    exact.start_scale(model, vol, temp, MLParams(scales=1, neighborhood=k, views=views))
+    exact.start_scale(model, vol, temp, MLParams(scales=1, neighborhood=k, views=views, distance=distance))
     assert not np.allclose(want, exact.lcpdf(voxels), atol=1e-3)  # it is pruned: candidates, not every site
 
 
@@ -163,8 +165,9 @@ def _nb(model, voxels, view):
     return wrapped_coords(voxels, model.shape, model.offsets[view])
 
 
-def test_one_pruned_gibbs_sweep_matches_reference(device, small_labels):
-    params, model = _model(small_labels, neighborhood=5, likelihood="pruned")
+@pytest.mark.parametrize("distance", ["squared", "mismatch"])
+def test_one_pruned_gibbs_sweep_matches_reference(device, small_labels, distance):
+    params, model = _model(small_labels, neighborhood=5, likelihood="pruned", distance=distance)
     vol, temp, sources = _state(model, seed=6)
     cl_b, ref = _backends(device, model, params, vol, temp, sources)
     for b in (cl_b, ref):

@@ -8,7 +8,9 @@ thesis_spec §2.2 (TIP14 eqs. 3-9) for voxel s, view v and label lambda is
 
 over every exemplar site p whose k x k window lies inside the exemplar, with c_p the
 site's centre value and y_{p,r} its neighbour r. The constant 1/(n h^d) cancels in
-every heuristic and is dropped.
+every heuristic and is dropped. With ``distance="mismatch"`` every squared difference
+(a - b)^2 above is [a != b] instead (:func:`difference`), and the bandwidth is taken in
+those units (:func:`phase_sigma`).
 """
 
 from __future__ import annotations
@@ -65,6 +67,22 @@ def exemplar_tables(exemplar: np.ndarray, half: int) -> tuple[np.ndarray, np.nda
     return flat[:, centre].copy(), np.delete(flat, centre, axis=1).T.copy()
 
 
+def difference(a: np.ndarray, b: np.ndarray, mismatch: bool) -> np.ndarray:
+    """The per-value distance of the Parzen estimate, float64: ``(a - b)^2``, or ``[a != b]``
+    with *mismatch* (broadcast like ``a - b``)."""
+    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    return (a != b).astype(np.float64) if mismatch else (a - b) ** 2
+
+
+def phase_sigma(image: np.ndarray) -> float:
+    """The standard deviation that plays sigma's part for mismatch counts: ``sqrt(m / 2)``,
+    m = 1 - sum_i f_i^2 the chance that two pixels drawn at random differ (f_i: the label
+    fractions), as 2 sigma^2 is the mean squared difference of two grey levels. On two labels
+    0 and 1 it is their standard deviation, so both distances give the same bandwidth."""
+    f = np.unique(image, return_counts=True)[1] / image.size
+    return float(np.sqrt((1.0 - np.sum(f * f)) / 2.0))
+
+
 def silverman(sigma: float, n: int, d: int) -> float:
     """Silverman's bandwidth ``sigma * (4 / (n (d + 2)))^(1 / (d + 4))`` (TIP14 eq. 6)."""
     return float(sigma * (4.0 / (n * (d + 2))) ** (1.0 / (d + 4)))
@@ -84,16 +102,29 @@ def nearest_label(values: np.ndarray, labels: np.ndarray) -> np.ndarray:
     return np.where(values - labels[lo] <= labels[hi] - values, labels[lo], labels[hi])
 
 
-def scale_exemplar(labels_img: np.ndarray, level: int, pyramid: str = "binomial") -> np.ndarray:
+def scale_exemplar(labels_img: np.ndarray, level: int, pyramid: str = "binomial", phases: bool = False) -> np.ndarray:
     """The exemplar of scale *level*, ``ceil(H / 2^level) x ceil(W / 2^level)`` (thesis_spec §2.5).
 
     ``"decimate"`` keeps the even pixels. ``"binomial"`` smooths with [1 2 1]/4 before each
     halving, so thin features survive as fainter ones instead of vanishing where they fall
     on odd pixels; the result is rounded to the nearest grey level of *labels_img*, because
-    the engine only ever writes those levels.
+    the engine only ever writes those levels. With *phases* (the levels are names, as for
+    ``distance="mismatch"``) each level's indicator is smoothed instead, and each pixel
+    takes the level of the largest (the lowest on a tie): averaging phases' values would
+    invent a phase where two others meet (matrix 0 beside particle 2 is not phase 1). On
+    two levels both round alike.
     """
     if pyramid == "decimate" or level == 0:
         return labels_img[:: 2**level, :: 2**level]
+    if phases:
+        values = np.unique(labels_img)
+        share = []
+        for v in values:
+            indicator = (labels_img == v).astype(np.float64)
+            for _ in range(level):
+                indicator = _binomial_halve(indicator)
+            share.append(indicator)
+        return values[np.argmax(np.stack(share), axis=0)].astype(labels_img.dtype)
     image = labels_img.astype(np.float64)
     for _ in range(level):
         image = _binomial_halve(image)
@@ -121,6 +152,7 @@ class ScaleModel:
     bandwidth: float
     labels: np.ndarray  # the grey levels Lambda, ascending
     n_sets: int  # conflict-free colour sets
+    mismatch: bool = False  # distance="mismatch": [a != b] for (a - b)^2 (see difference)
 
     @property
     def n_sites(self) -> int:
@@ -153,12 +185,13 @@ def build_scale(
 ) -> ScaleModel:
     """Tables of scale *level* from the full-resolution exemplar labels."""
     half = params.neighborhood // 2
-    ex = scale_exemplar(labels_img, level, params.pyramid)
+    mismatch = params.distance == "mismatch"  # "auto" unresolved (params.for_exemplar): squared
+    ex = scale_exemplar(labels_img, level, params.pyramid, phases=mismatch)
     centres, patches = exemplar_tables(ex, half)
     if params.bandwidth is not None:
         h = params.bandwidth[level]
     else:
-        sigma = float(ex.std())
+        sigma = phase_sigma(ex) if mismatch else float(ex.std())
         # A constant exemplar has sigma = 0; any bandwidth gives the same (constant) result.
         factor = params.bandwidth_factor[level]
         h = silverman(sigma, centres.size, params.neighborhood**2) * factor if sigma > 0 else 1.0
@@ -177,4 +210,5 @@ def build_scale(
         bandwidth=h,
         labels=np.unique(labels_img).astype(np.float64),
         n_sets=set_count(sshape, half),
+        mismatch=mismatch,
     )

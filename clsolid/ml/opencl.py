@@ -8,7 +8,7 @@ from ..core import programs
 from .balance import n_score_slots, score_stride
 from ..core.device import Device
 from ..errors import DeviceMemoryError, InputError
-from .model import ScaleModel
+from .model import ScaleModel, difference
 from .params import MLParams
 from ..core.philox import TAG_INIT, sample_tag, seed_key
 from ..core.probe import VECTOR_WIDTHS, probe
@@ -133,6 +133,7 @@ class CLBackend:
         return programs.build(self.device, "ml/likelihood.cl", {
             "NR": nr, "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
             "NS": self.params.prune_similar if self.params.likelihood == "pruned" else 1,
+            "MISMATCH": int(model.mismatch),
         })
 
     def _pad(self, n: int) -> int:
@@ -207,7 +208,8 @@ class CLBackend:
         self.gvals = self._buf(gvals)
         # Gaussian factor of every (group, label) pair, label rows padded to whole vectors.
         kern = np.zeros((gvals.size, self._pad(n_labels)), np.float32)
-        kern[:, :n_labels] = np.exp(-((gvals[:, None] - model.labels[None, :]) ** 2) / (2.0 * model.bandwidth**2))
+        kern[:, :n_labels] = np.exp(-difference(gvals[:, None], model.labels[None, :], model.mismatch)
+                                    / (2.0 * model.bandwidth**2))
         self.kern = self._buf(kern)
         self.labels = self._buf(model.labels.astype(np.float32))
         self.offsets = self._buf(model.offsets.astype(np.int32))

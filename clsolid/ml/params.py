@@ -65,6 +65,15 @@ RELAXATIONS = ("icm", "gibbs", "annealing")
 LIKELIHOODS = ("auto", "exact", "pruned")
 AUTO_PRUNED_LEVELS = 8
 
+#: How two neighbourhoods (and a label and a centre value) differ. "squared" sums squared
+#: grey-level differences (the thesis); "mismatch" counts the neighbours whose labels differ,
+#: each weighted (1 - t)^2, so that phases are names, not numbers: with squared
+#: differences a 3-phase material matches a 1-2 pair closer than a 1-3 pair, and its
+#: volume changes when its phases' grey values are permuted. On two labels both are the same
+#: distance. "auto" counts mismatches on categorical exemplars (as for the likelihood: their own
+#: values, at most AUTO_PRUNED_LEVELS of them) and squares grey differences (README, Choices).
+DISTANCES = ("auto", "squared", "mismatch")
+
 
 def canonical_heuristic(name: str) -> str:
     """Return the clsolid name of a heuristic given any of its names or tags."""
@@ -108,6 +117,7 @@ class MLParams:
     sweeps: int | None = None
     balance: float = 1.0
     likelihood: str = "auto"
+    distance: str = "auto"
     prune_similar: int = 8
     prune_sample: int = 64
     prune_min_weight: float = 0.0
@@ -162,6 +172,7 @@ class MLParams:
             raise InputError(f"balance={self.balance!r} must be a number in [0, 1] "
                              "(0 = off, 1 = the exemplar's label fractions exactly)")
         one_of("likelihood", self.likelihood, LIKELIHOODS)
+        one_of("distance", self.distance, DISTANCES)
         int_in("prune_similar", self.prune_similar, 1, 16)
         int_in("prune_sample", self.prune_sample, 0, 4096)
         if not (_real(self.prune_min_weight) and 0 <= self.prune_min_weight <= 1):
@@ -183,12 +194,13 @@ class MLParams:
         return tuple(float(v) for v in values)
 
     def for_exemplar(self, n_levels: int, categorical: bool) -> "MLParams":
-        """These parameters with ``likelihood="auto"`` resolved for an exemplar of *n_levels*
-        levels, *categorical* if they are its own values (not a quantisation of grey ones)."""
-        if self.likelihood != "auto":
-            return self
-        prune = categorical and n_levels <= AUTO_PRUNED_LEVELS
-        return replace(self, likelihood="pruned" if prune else "exact")
+        """These parameters with ``likelihood="auto"`` and ``distance="auto"`` resolved for an
+        exemplar of *n_levels* levels, *categorical* if they are its own values (not a
+        quantisation of grey ones)."""
+        phases = categorical and n_levels <= AUTO_PRUNED_LEVELS
+        likelihood = ("pruned" if phases else "exact") if self.likelihood == "auto" else self.likelihood
+        distance = ("mismatch" if phases else "squared") if self.distance == "auto" else self.distance
+        return replace(self, likelihood=likelihood, distance=distance)
 
     @property
     def view_names(self) -> tuple[str, ...]:

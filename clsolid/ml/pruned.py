@@ -116,7 +116,15 @@ def window_table(model: ScaleModel, similar: int, sources: np.ndarray | None = N
     return WindowTable(window_of=rank[window_of].astype(np.int32), first_site=first,
                        count=count[order].astype(np.int32),
                        source=(source_of_site(model) if sources is None else sources)[first],
-                       similar=similar_windows(model.patches.T[first], similar), grid=grid)
+                       similar=similar_windows(_coordinates(model, model.patches.T[first]), similar), grid=grid)
+
+
+def _coordinates(model: ScaleModel, neighbours: np.ndarray) -> np.ndarray:
+    """Rows whose squared distances order *neighbours* ``(U, R)`` as the model's distance does:
+    themselves, or with ``model.mismatch`` their one-hot codes (squared distance: 2 x mismatches)."""
+    if not model.mismatch:
+        return neighbours
+    return np.concatenate([neighbours == v for v in model.labels], axis=1).astype(np.float64)
 
 
 def coherence_offsets(model: ScaleModel, views: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:

@@ -13,7 +13,7 @@ import numpy as np
 
 from .balance import n_score_slots, score_stride
 from . import pruned
-from .model import ScaleModel, wrapped_coords  # noqa: F401 (wrapped_coords: also this module's name)
+from .model import ScaleModel, difference, wrapped_coords  # noqa: F401 (wrapped_coords: also this module's name)
 from ..core.philox import TAG_INIT, bounded, unit_float, voxel_uint32, voxel_words
 
 _CHUNK = 128  # voxels per vectorised step, to bound memory
@@ -32,10 +32,13 @@ def logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
 
 def site_distances(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels: np.ndarray,
                    view: int) -> np.ndarray:
-    """``A_p`` ``(m, n)``: each voxel's weighted squared neighbourhood distance to every site."""
+    """``A_p`` ``(m, n)``: each voxel's weighted squared neighbourhood distance to every site
+    (weighted mismatch count with ``model.mismatch``)."""
     nb = wrapped_coords(voxels, model.shape, model.offsets[view])
     x = vol.ravel()[nb].astype(np.float64)
     w = 1.0 - temp.ravel()[nb].astype(np.float64)
+    if model.mismatch:
+        return np.sum((w**2)[:, :, None] * (x[:, :, None] != model.patches[None, :, :]), axis=1)
     diff = w[:, :, None] * (x[:, :, None] - model.patches[None, :, :])  # (m, R, n)
     return np.sum(diff**2, axis=1)
 
@@ -50,7 +53,7 @@ def parzen(model: ScaleModel, a: np.ndarray, keep: np.ndarray | None = None) -> 
     neighbourhood distance to every site, *a* ``(m, n)``: the Parzen sum over the sites, or
     over those where *keep* ``(m, n)`` is True, or, if *keep* is a float array, with each
     site's term multiplied by it (0: left out)."""
-    dist = (model.labels[None, :, None] - model.centres[None, None, :]) ** 2 + a[:, None, :]
+    dist = difference(model.labels[None, :, None], model.centres[None, None, :], model.mismatch) + a[:, None, :]
     logw = -dist / (2.0 * model.bandwidth**2)
     if keep is not None:
         with np.errstate(divide="ignore"):

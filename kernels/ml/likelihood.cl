@@ -18,6 +18,7 @@
  *   NLMAX  largest number of labels
  *   NVIEW  number of constrained views (2 or 3)
  *   NS     windows per source in the pruned sum's candidate sets (clsolid.ml.pruned)
+ *   MISMATCH  1: values differ by [a != b] instead of (a - b)^2 (clsolid.ml.model.difference)
  */
 #define CAT_(a, b) a##b
 #define CAT(a, b) CAT_(a, b)
@@ -118,6 +119,19 @@ inline void add_chunk(floatv a, float cmin, float k, float *gmin, float *gsum)
     *gsum += hsum(exp(((floatv)(m) - a) * k));   /* padding lanes: exp(-inf) = 0 */
 }
 
+/* A neighbour's pair (xw, w) from its value x and weight wr = 1 - t: (wr x, wr) for squared
+ * differences, (x, wr^2) for mismatches; ADD_TERM then adds wr^2 (x - p)^2 or wr^2 [x != p]
+ * to acc, for the exemplar values p (of type T); KDIST(k, a, b) is k (a - b)^2 or k [a != b]. */
+#if MISMATCH
+#define PAIR(x, wr, xw, w) { xw = (x); w = (wr) * (wr); }
+#define ADD_TERM(T, acc, xw, w, p) { acc += select((T)(0.0f), (T)(w), (p) != (T)(xw)); }
+#define KDIST(k, a, b) ((a) != (b) ? (k) : 0.0f)
+#else
+#define PAIR(x, wr, xw, w) { xw = (wr) * (x); w = (wr); }
+#define ADD_TERM(T, acc, xw, w, p) { T d_ = (xw) - (w) * (p); acc += d_ * d_; }
+#define KDIST(k, a, b) ((k) * ((a) - (b)) * ((a) - (b)))   /* a macro: fused as the caller's expression */
+#endif
+
 /* For VB voxel-views per work item: the log of the Parzen sum of each centre-value group,
  *   log_sums[item][g] = log sum_{p : c_p = g} exp(-k * A_p),
  *   A_p = sum_r ((1 - t_r)(x_r - y_{p,r}))^2,       k = 1 / (2 h^2).
@@ -150,9 +164,7 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
         __global const int *off = offsets + (item % n_views) * NR * 3;
         for (int r = 0; r < NR; ++r) {
             int j = neighbour(voxel, Y, X, Z, off + 3 * r);
-            float wr = 1.0f - temp[j];
-            w[b][r] = wr;
-            xw[b][r] = wr * vol[j];
+            PAIR(vol[j], 1.0f - temp[j], xw[b][r], w[b][r])
         }
     }
 
@@ -184,7 +196,7 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
         floatv a0 = 0.0f, a1 = 0.0f, a2 = 0.0f, a3 = 0.0f, a4 = 0.0f, a5 = 0.0f, a6 = 0.0f, a7 = 0.0f;
         for (int r = 0; r < NR; ++r) {
             floatv p = pc[r];
-#define TERM(b, acc) { floatv d = xw[b][r] - w[b][r] * p; acc += d * d; }
+#define TERM(b, acc) ADD_TERM(floatv, acc, xw[b][r], w[b][r], p)
             TERM(0, a0)
 #if VB > 1
             TERM(1, a1)
@@ -216,10 +228,7 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
         int c = best_chunk[b];
         __global const floatv *pc = (__global const floatv *)(patches + (size_t)c * NR * VW);
         floatv a = 0.0f;
-        for (int r = 0; r < NR; ++r) {
-            floatv d = xw[b][r] - w[b][r] * pc[r];
-            a += d * d;
-        }
+        for (int r = 0; r < NR; ++r) ADD_TERM(floatv, a, xw[b][r], w[b][r], pc[r])
         const float *as = (const float *)&a;
         int lane = 0;
         for (int l = 1; l < chunk_valid[c]; ++l)
@@ -309,8 +318,7 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
     __global const int *off = offsets + view * NR * 3;
     for (int r = 0; r < NR; ++r) {
         int j = shifted(z, y, x, Z, Y, X, off + 3 * r);
-        ws[r] = 1.0f - temp[j];
-        xws[r] = ws[r] * vol[j];
+        PAIR(vol[j], 1.0f - temp[j], xws[r], ws[r])
     }
     float gmax[NGMAX], gsum[NGMAX];
     for (int g = 0; g < n_groups; ++g) {
@@ -340,10 +348,7 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
         }
         __global const float8 *p = (__global const float8 *)(win_patches + (size_t)wnd * NRV * 8);
         float8 acc = (float8)(0.0f);
-        for (int q = 0; q < NRV; ++q) {
-            float8 d = xw[q] - w[q] * p[q];
-            acc += d * d;
-        }
+        for (int q = 0; q < NRV; ++q) ADD_TERM(float8, acc, xw[q], w[q], p[q])
         float4 h = acc.lo + acc.hi;
         float a = (h.x + h.y) + (h.z + h.w);
         if (a < best || (a == best && wnd < best_w)) {   /* the lowest window on a tie */
@@ -396,7 +401,7 @@ inline float vmax_all(const floatv *v, int n)
 }
 
 /* Normalised log f_view(label) for every label, as NLV vectors; lanes past n_labels = -inf.
- *   log f(label) = log sum_g exp(ls_g - k (label - value_g)^2)
+ *   log f(label) = log sum_g exp(ls_g - k (label - value_g)^2)   ([label != value_g]: MISMATCH)
  * Fast path: with M = max_g ls_g, f = M + log sum_g exp(ls_g - M) * kern[g][label], where
  * kern = exp(-k (label - value)^2) is tabulated on the host ([group][label], padded).
  * Where that sum is too small to trust in float32 (a label far from every likely group)
@@ -426,12 +431,12 @@ inline void view_logf(__global const float *ls, int n_groups, __global const flo
         } else {
             float lam = labels[l], mx = -INFINITY;
             for (int g = 0; g < n_groups; ++g) {
-                float d = lam - gval[g], x = ls[g] - k * d * d;
+                float x = ls[g] - KDIST(k, lam, gval[g]);
                 mx = x > mx ? x : mx;
             }
             s = 0.0f;
             for (int g = 0; g < n_groups; ++g) {
-                float d = lam - gval[g], x = ls[g] - k * d * d - mx;
+                float x = ls[g] - KDIST(k, lam, gval[g]) - mx;
                 if (x > NEGLIGIBLE) s += exp(x);
             }
             fs[l] = mx + log(s);
