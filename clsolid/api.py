@@ -296,10 +296,13 @@ def synthesize(
 
         Distance: ``distance="squared"`` compares neighbourhoods and centre values by squared
         grey-level differences (the thesis); ``"mismatch"`` counts the neighbours whose levels
-        differ (each weighted (1 - t)^2), so that phases are names, not numbers, and the
-        bandwidth is taken in those units (``clsolid.ml.model.phase_sigma``). ``"auto"``
-        (default) counts mismatches on the exemplars the pruned sum takes (categorical, at
-        most 8 values) and squares grey differences; on two levels both are the same.
+        differ (each weighted (1 - t)^2), so that phases are names, not numbers;
+        ``"weighted"`` costs a mismatch between phases a and b 1/(2 f_a) + 1/(2 f_b) (f: the
+        exemplar's fractions; the chi-square distance), so that a rare phase's shapes count as
+        much as the matrix's. The bandwidth is taken in each distance's units
+        (``clsolid.ml.model.phase_sigma``). ``"auto"`` (default) takes ``"weighted"`` on the
+        exemplars the pruned sum takes (categorical, at most 8 values; ``"mismatch"`` on two,
+        the same distance) and ``"squared"`` on grey ones; on two levels all three are the same.
 
     Returns
     -------

@@ -148,9 +148,11 @@ def _add_synth(sub) -> None:
                         "candidates plus a sample of the other sites (pruned); auto (default): pruned for "
                         "categorical exemplars (at most 8 values, kept), exact for grey ones")
     p.add_argument("--distance", choices=DISTANCES, default=d.distance,
-                   help="how neighbourhoods differ: squared grey-level differences (squared, the thesis) or the "
-                        "count of differing levels (mismatch: phases are names, not numbers); auto (default): "
-                        "mismatch for categorical exemplars (at most 8 values, kept), squared for grey ones")
+                   help="how neighbourhoods differ: squared grey-level differences (squared, the thesis), the "
+                        "count of differing levels (mismatch: phases are names, not numbers), or that count with "
+                        "a mismatch between phases a and b costing 1/(2 f_a) + 1/(2 f_b) (weighted; f: fractions); "
+                        "auto (default): weighted for categorical exemplars (at most 8 values, kept; mismatch, the "
+                        "same, on two), squared for grey ones")
     p.add_argument("--prune-similar", type=int, default=d.prune_similar,
                    help="pruned: windows taken per source, itself included (default %(default)s)")
     p.add_argument("--prune-sample", type=int, default=d.prune_sample,

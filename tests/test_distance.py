@@ -1,4 +1,5 @@
-"""The mismatch distance: phases compared as names, not numbers (``distance="mismatch"``).
+"""The mismatch distances: phases compared as names, not numbers (``distance="mismatch"`` and
+``"weighted"``, the default for categorical exemplars).
 
 The kernels are checked against the float64 reference in test_kernels and test_pruned (both
 distances); here: what the distance is, that on two levels it is the squared one, that it
@@ -12,7 +13,7 @@ import clsolid
 from clsolid.errors import InputError
 from clsolid.gallery import gallery_exemplar
 from clsolid.ml import pruned
-from clsolid.ml.model import build_scale, difference, phase_sigma, scale_exemplar
+from clsolid.ml.model import build_scale, difference, phase_costs, phase_sigma, scale_exemplar
 from clsolid.ml.params import MLParams
 from clsolid.ml.reference import ReferenceBackend, site_distances
 
@@ -32,10 +33,19 @@ def _lcpdf(labels_img, vol, temp, voxels, **kw):
     return model, ref.lcpdf(voxels)
 
 
-def test_difference_is_squared_or_a_mismatch():
+def test_difference_is_squared_a_mismatch_or_a_weighted_one():
     a, b = np.array([0, 1, 2, 2]), np.array([2, 1, 0, 1])
     np.testing.assert_array_equal(difference(a, b, False), [4, 0, 4, 1])
     np.testing.assert_array_equal(difference(a, b, True), [1, 0, 1, 1])
+    np.testing.assert_array_equal(difference(a, b, True, np.array([1.0, 10.0, 100.0])), [101, 0, 101, 110])
+
+
+def test_phase_costs_are_half_inverse_fractions_and_distinct():
+    img = np.repeat(np.array([0, 1, 2, 3]), [50, 30, 10, 10])
+    costs = phase_costs(img)
+    assert costs.dtype == np.float32
+    np.testing.assert_allclose(costs, [1.0, 0.5 / 0.3, 5.0, 5.0], rtol=1e-6)
+    assert costs[2] != costs[3]  # equal fractions, told apart
 
 
 def test_mismatch_counts_differing_neighbours_weighted_by_temperature():
@@ -60,19 +70,21 @@ def test_phase_sigma_of_two_levels_is_their_standard_deviation():
     assert phase_sigma(three) == pytest.approx(np.sqrt((1 - 3 / 9) / 2))
 
 
-def test_on_two_levels_both_distances_are_the_same_likelihood():
+@pytest.mark.parametrize("distance", ["mismatch", "weighted"])
+def test_on_two_levels_every_distance_is_the_same_likelihood(distance):
     labels_img = _labels("porous50")[:24, :24]
     rng = np.random.default_rng(1)
     vol = rng.integers(0, 2, SHAPE).astype(float)
     temp = rng.random(SHAPE) * 0.5
     voxels = np.arange(0, vol.size, 5)
     m1, sq = _lcpdf(labels_img, vol, temp, voxels, distance="squared")
-    m2, mm = _lcpdf(labels_img, vol, temp, voxels, distance="mismatch")
-    assert m1.bandwidth == pytest.approx(m2.bandwidth)
-    np.testing.assert_allclose(mm, sq, rtol=1e-12, atol=1e-9)
+    m2, mm = _lcpdf(labels_img, vol, temp, voxels, distance=distance)
+    if distance == "mismatch":  # same units; weighted: the units differ, the bandwidth follows
+        assert m1.bandwidth == pytest.approx(m2.bandwidth)
+    np.testing.assert_allclose(mm, sq, rtol=1e-6, atol=1e-6)  # the costs are float32
 
 
-@pytest.mark.parametrize("distance, same", [("mismatch", True), ("squared", False)])
+@pytest.mark.parametrize("distance, same", [("mismatch", True), ("weighted", True), ("squared", False)])
 def test_renaming_the_phases_renames_the_likelihood(distance, same):
     """Which value a phase carries is the user's choice: with mismatches, permuting the values
     of the exemplar and of the volume permutes the log LCPDF's labels and nothing else."""
@@ -120,18 +132,19 @@ def test_phase_pyramid_on_two_levels_is_the_grey_one():
                                       scale_exemplar(labels_img, level, "binomial"))
 
 
-def test_similar_windows_follow_the_mismatch_count():
+@pytest.mark.parametrize("distance", ["mismatch", "weighted"])
+def test_similar_windows_follow_the_mismatch_count(distance):
     labels_img = _labels("composite3")[:20, :20]
-    model = build_scale(labels_img, SHAPE, MLParams(scales=1, neighborhood=3, distance="mismatch"), 0)
+    model = build_scale(labels_img, SHAPE, MLParams(scales=1, neighborhood=3, distance=distance), 0)
     table = pruned.window_table(model, 5)
     rows = model.patches.T[table.first_site]
-    d = (rows[:, None, :] != rows[None, :, :]).sum(-1).astype(float)
+    d = difference(rows[:, None, :], rows[None, :, :], True, model.costs).sum(-1)
     np.fill_diagonal(d, np.inf)
     want = np.lexsort((np.broadcast_to(np.arange(d.shape[0]), d.shape), d), axis=1)[:, :4]
     np.testing.assert_array_equal(table.similar[:, 1:], want)
 
 
-@pytest.mark.parametrize("name, levels, want", [("composite3", 32, "mismatch"), ("porous50", 32, "mismatch"),
+@pytest.mark.parametrize("name, levels, want", [("composite3", 32, "weighted"), ("porous50", 32, "mismatch"),
                                                 ("brick", 32, "squared"), ("composite3", 2, "squared")])
 def test_auto_counts_mismatches_on_categorical_exemplars(device, name, levels, want):
     ex = gallery_exemplar(name, 64)
@@ -143,3 +156,6 @@ def test_auto_counts_mismatches_on_categorical_exemplars(device, name, levels, w
 def test_bad_distance_is_refused():
     with pytest.raises(InputError, match="distance"):
         MLParams(distance="hamming")
+    with pytest.raises(InputError, match="0..L-1"):  # the kernels look costs up by label
+        build_scale(np.array([[0, 2], [2, 0]] * 8).reshape(8, 4), (4, 4, 4),
+                    MLParams(scales=1, neighborhood=3, distance="weighted"), 0)

@@ -20,7 +20,8 @@ def _pair(device, labels_img, shape, vol, temp, **kw):
 
 
 @pytest.mark.parametrize("k, views, distance", [(3, 2, "squared"), (5, 3, "squared"), (7, 2, "squared"),
-                                                (11, 2, "squared"), (5, 3, "mismatch"), (11, 2, "mismatch")])
+                                                (11, 2, "squared"), (5, 3, "mismatch"), (11, 2, "mismatch"),
+                                                (5, 3, "weighted"), (11, 2, "weighted")])
 def test_per_label_log_lcpdf_matches_reference(device, small_labels, k, views, distance):
     shape = (7, 9, 11)
     params = dict(neighborhood=k, views=views, scales=1, distance=distance)
@@ -71,7 +72,7 @@ def test_group_tables_cover_every_site_once(small_labels):
 
 @pytest.mark.parametrize("heuristic, distance", [(h, "squared") for h in ("h2-product", "h2-min", "h2-max", "h1-lowest",
                                                                           "h1-highest", "h1-mean")]
-                         + [("h2-product", "mismatch"), ("h1-lowest", "mismatch")])
+                         + [("h2-product", "mismatch"), ("h1-lowest", "mismatch"), ("h2-product", "weighted")])
 def test_one_icm_step_matches_reference(device, small_labels, heuristic, distance):
     shape = (6, 8, 10)
     params = dict(neighborhood=5, views=3, scales=1, heuristic=heuristic, distance=distance)

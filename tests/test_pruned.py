@@ -81,7 +81,7 @@ def test_exact_kernel_records_the_nearest_site(device, small_labels):
 @pytest.mark.parametrize("k, views, similar, sample, distance",
                          [(3, 2, 1, 0, "squared"), (5, 3, 8, 0, "squared"), (7, 2, 16, 0, "squared"),
                           (5, 2, 8, 64, "squared"), (7, 3, 4, 17, "squared"), (5, 3, 8, 0, "mismatch"),
-                          (7, 2, 4, 17, "mismatch")])
+                          (7, 2, 4, 17, "mismatch"), (5, 2, 8, 17, "weighted")])
 def test_pruned_lcpdf_matches_reference(device, small_labels, k, views, similar, sample, distance):
     params, model = _model(small_labels, neighborhood=k, views=views, likelihood="pruned", prune_similar=similar,
                            prune_sample=sample, distance=distance)
@@ -165,7 +165,7 @@ def _nb(model, voxels, view):
     return wrapped_coords(voxels, model.shape, model.offsets[view])
 
 
-@pytest.mark.parametrize("distance", ["squared", "mismatch"])
+@pytest.mark.parametrize("distance", ["squared", "mismatch", "weighted"])
 def test_one_pruned_gibbs_sweep_matches_reference(device, small_labels, distance):
     params, model = _model(small_labels, neighborhood=5, likelihood="pruned", distance=distance)
     vol, temp, sources = _state(model, seed=6)

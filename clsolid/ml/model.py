@@ -67,20 +67,43 @@ def exemplar_tables(exemplar: np.ndarray, half: int) -> tuple[np.ndarray, np.nda
     return flat[:, centre].copy(), np.delete(flat, centre, axis=1).T.copy()
 
 
-def difference(a: np.ndarray, b: np.ndarray, mismatch: bool) -> np.ndarray:
+def difference(a: np.ndarray, b: np.ndarray, mismatch: bool, costs: np.ndarray | None = None) -> np.ndarray:
     """The per-value distance of the Parzen estimate, float64: ``(a - b)^2``, or ``[a != b]``
-    with *mismatch* (broadcast like ``a - b``)."""
+    with *mismatch*, or with *costs* (labels 0..L-1) ``[a != b] (costs[a] + costs[b])``
+    (broadcast like ``a - b``)."""
     a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    if costs is not None:
+        c = np.asarray(costs, np.float64)
+        return np.where(a != b, c[a.astype(np.intp)] + c[b.astype(np.intp)], 0.0)
     return (a != b).astype(np.float64) if mismatch else (a - b) ** 2
 
 
-def phase_sigma(image: np.ndarray) -> float:
+def phase_costs(labels_img: np.ndarray) -> np.ndarray:
+    """float32 ``(L,)``: each label's half of a weighted mismatch, ``1 / (2 f_l)`` (f_l: its
+    fraction in *labels_img*, labels 0..L-1), so that a mismatch between phases a and b costs
+    ``1/(2 f_a) + 1/(2 f_b)``: the chi-square distance of correspondence analysis, under which a
+    rare phase's pixel weighs as much as the matrix's do together. Two phases with the same
+    fraction are moved one float apart: the kernels tell phases apart by their costs."""
+    f = np.bincount(labels_img.ravel().astype(np.intp)) / labels_img.size
+    costs = (0.5 / f).astype(np.float32)
+    for i in range(costs.size):
+        while np.any(costs[:i] == costs[i]):
+            costs[i] = np.nextafter(costs[i], np.float32(np.inf))
+    return costs
+
+
+def phase_sigma(image: np.ndarray, costs: np.ndarray | None = None) -> float:
     """The standard deviation that plays sigma's part for mismatch counts: ``sqrt(m / 2)``,
-    m = 1 - sum_i f_i^2 the chance that two pixels drawn at random differ (f_i: the label
-    fractions), as 2 sigma^2 is the mean squared difference of two grey levels. On two labels
-    0 and 1 it is their standard deviation, so both distances give the same bandwidth."""
-    f = np.unique(image, return_counts=True)[1] / image.size
-    return float(np.sqrt((1.0 - np.sum(f * f)) / 2.0))
+    m the mean distance between two pixels drawn at random (plain mismatches: 1 - sum_i f_i^2,
+    the chance that they differ; f_i the label fractions), as 2 sigma^2 is the mean squared
+    difference of two grey levels. On two labels 0 and 1 it is their standard deviation, so
+    both distances give the same bandwidth; with *costs* (:func:`phase_costs`) the weighted one."""
+    values, counts = np.unique(image, return_counts=True)
+    f = counts / image.size
+    if costs is None:
+        return float(np.sqrt((1.0 - np.sum(f * f)) / 2.0))
+    d = difference(values[:, None], values[None, :], True, costs)
+    return float(np.sqrt(f @ d @ f / 2.0))
 
 
 def silverman(sigma: float, n: int, d: int) -> float:
@@ -152,7 +175,15 @@ class ScaleModel:
     bandwidth: float
     labels: np.ndarray  # the grey levels Lambda, ascending
     n_sets: int  # conflict-free colour sets
-    mismatch: bool = False  # distance="mismatch": [a != b] for (a - b)^2 (see difference)
+    mismatch: bool = False  # distance="mismatch" or "weighted": [a != b] for (a - b)^2 (see difference)
+    costs: np.ndarray | None = None  # distance="weighted": each label's half-cost (phase_costs)
+
+    def coded(self, values: np.ndarray) -> np.ndarray:
+        """Label *values* as the kernels compare them: themselves, or with :attr:`costs` their
+        costs (float32), so that a mismatch's cost is the sum of the two codes."""
+        if self.costs is None:
+            return values
+        return self.costs[np.asarray(values).astype(np.intp)]
 
     @property
     def n_sites(self) -> int:
@@ -185,13 +216,19 @@ def build_scale(
 ) -> ScaleModel:
     """Tables of scale *level* from the full-resolution exemplar labels."""
     half = params.neighborhood // 2
-    mismatch = params.distance == "mismatch"  # "auto" unresolved (params.for_exemplar): squared
+    mismatch = params.distance in ("mismatch", "weighted")  # "auto" unresolved (params.for_exemplar): squared
+    costs = None
+    if params.distance == "weighted":
+        values = np.unique(labels_img)
+        if not np.array_equal(values, np.arange(values.size)):
+            raise InputError("distance='weighted' needs the labels 0..L-1 (as synthesize makes them)")
+        costs = phase_costs(labels_img)
     ex = scale_exemplar(labels_img, level, params.pyramid, phases=mismatch)
     centres, patches = exemplar_tables(ex, half)
     if params.bandwidth is not None:
         h = params.bandwidth[level]
     else:
-        sigma = phase_sigma(ex) if mismatch else float(ex.std())
+        sigma = phase_sigma(ex, costs) if mismatch else float(ex.std())
         # A constant exemplar has sigma = 0; any bandwidth gives the same (constant) result.
         factor = params.bandwidth_factor[level]
         h = silverman(sigma, centres.size, params.neighborhood**2) * factor if sigma > 0 else 1.0
@@ -211,4 +248,5 @@ def build_scale(
         labels=np.unique(labels_img).astype(np.float64),
         n_sets=set_count(sshape, half),
         mismatch=mismatch,
+        costs=costs,
     )

@@ -38,7 +38,7 @@ def group_tables(model: ScaleModel, vw: int):
     slot = first_chunk[group_of_site[order]] * vw + rank  # padded position of each sorted site
     n_chunks = chunk_group.size
     padded = np.zeros((model.patches.shape[0], n_chunks * vw), np.float32)
-    padded[:, slot] = model.patches[:, order]
+    padded[:, slot] = model.coded(model.patches)[:, order]
     patches = padded.reshape(-1, n_chunks, vw).transpose(1, 0, 2).copy()
     chunk_valid = np.minimum(vw, counts[chunk_group] - (np.arange(n_chunks) - first_chunk[chunk_group]) * vw)
     chunk_site = np.zeros(n_chunks * vw, np.int32)
@@ -133,7 +133,8 @@ class CLBackend:
         return programs.build(self.device, "ml/likelihood.cl", {
             "NR": nr, "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
             "NS": self.params.prune_similar if self.params.likelihood == "pruned" else 1,
-            "MISMATCH": int(model.mismatch),
+            "MISMATCH": 2 if model.costs is not None else int(model.mismatch),
+            **({"COSTS": ",".join(f"{c.item().hex()}f" for c in model.costs)} if model.costs is not None else {}),
         })
 
     def _pad(self, n: int) -> int:
@@ -208,7 +209,7 @@ class CLBackend:
         self.gvals = self._buf(gvals)
         # Gaussian factor of every (group, label) pair, label rows padded to whole vectors.
         kern = np.zeros((gvals.size, self._pad(n_labels)), np.float32)
-        kern[:, :n_labels] = np.exp(-difference(gvals[:, None], model.labels[None, :], model.mismatch)
+        kern[:, :n_labels] = np.exp(-difference(gvals[:, None], model.labels[None, :], model.mismatch, model.costs)
                                     / (2.0 * model.bandwidth**2))
         self.kern = self._buf(kern)
         self.labels = self._buf(model.labels.astype(np.float32))
@@ -262,7 +263,7 @@ class CLBackend:
         group = np.searchsorted(gvals, model.centres[first].astype(np.float32)).astype(np.int32)
         nr = model.patches.shape[0]
         rows = np.zeros((first.size, -(-nr // 8) * 8), np.float32)  # whole float8 vectors, zero-padded
-        rows[:, :nr] = model.patches.T[first]
+        rows[:, :nr] = model.coded(model.patches).T[first]
         self.coherence = (self._buf(pruning.voxel_offsets), self._buf(pruning.exemplar_offsets))
         self.windows = (self._buf(table.window_of), self._buf(similar.astype(np.int32)),
                         self._buf(rows), self._buf(group),

@@ -67,12 +67,15 @@ AUTO_PRUNED_LEVELS = 8
 
 #: How two neighbourhoods (and a label and a centre value) differ. "squared" sums squared
 #: grey-level differences (the thesis); "mismatch" counts the neighbours whose labels differ,
-#: each weighted (1 - t)^2, so that phases are names, not numbers: with squared
-#: differences a 3-phase material matches a 1-2 pair closer than a 1-3 pair, and its
-#: volume changes when its phases' grey values are permuted. On two labels both are the same
-#: distance. "auto" counts mismatches on categorical exemplars (as for the likelihood: their own
-#: values, at most AUTO_PRUNED_LEVELS of them) and squares grey differences (README, Choices).
-DISTANCES = ("auto", "squared", "mismatch")
+#: each weighted (1 - t)^2, so that phases are names, not numbers: with squared differences a
+#: 3-phase material matches a 1-2 pair closer than a 1-3 pair, and its volume changes when its
+#: phases' grey values are permuted; "weighted" costs a mismatch between phases a and b
+#: 1/(2 f_a) + 1/(2 f_b) (f: the exemplar's fractions; the chi-square distance), so that a rare
+#: phase's shapes count as much as the matrix's. On two labels all three are the same
+#: distance. "auto" takes "weighted" on categorical exemplars (as for the likelihood: their own
+#: values, at most AUTO_PRUNED_LEVELS of them; "mismatch", the same, on two) and "squared" on
+#: grey ones (README, Choices).
+DISTANCES = ("auto", "squared", "mismatch", "weighted")
 
 
 def canonical_heuristic(name: str) -> str:
@@ -199,7 +202,9 @@ class MLParams:
         quantisation of grey ones)."""
         phases = categorical and n_levels <= AUTO_PRUNED_LEVELS
         likelihood = ("pruned" if phases else "exact") if self.likelihood == "auto" else self.likelihood
-        distance = ("mismatch" if phases else "squared") if self.distance == "auto" else self.distance
+        # On two phases the weights are one constant: the plain count is the same distance.
+        counted = "weighted" if n_levels > 2 else "mismatch"
+        distance = (counted if phases else "squared") if self.distance == "auto" else self.distance
         return replace(self, likelihood=likelihood, distance=distance)
 
     @property

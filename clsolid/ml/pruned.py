@@ -121,10 +121,13 @@ def window_table(model: ScaleModel, similar: int, sources: np.ndarray | None = N
 
 def _coordinates(model: ScaleModel, neighbours: np.ndarray) -> np.ndarray:
     """Rows whose squared distances order *neighbours* ``(U, R)`` as the model's distance does:
-    themselves, or with ``model.mismatch`` their one-hot codes (squared distance: 2 x mismatches)."""
+    themselves, or with ``model.mismatch`` their one-hot codes (squared distance: 2 x mismatches),
+    each label's scaled by the square root of its cost with ``model.costs`` (squared distance:
+    2 x the weighted mismatches)."""
     if not model.mismatch:
         return neighbours
-    return np.concatenate([neighbours == v for v in model.labels], axis=1).astype(np.float64)
+    scale = np.ones(model.labels.size) if model.costs is None else np.sqrt(model.costs.astype(np.float64))
+    return np.concatenate([(neighbours == v) * c for v, c in zip(model.labels, scale)], axis=1).astype(np.float64)
 
 
 def coherence_offsets(model: ScaleModel, views: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:

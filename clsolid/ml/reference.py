@@ -38,7 +38,8 @@ def site_distances(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels:
     x = vol.ravel()[nb].astype(np.float64)
     w = 1.0 - temp.ravel()[nb].astype(np.float64)
     if model.mismatch:
-        return np.sum((w**2)[:, :, None] * (x[:, :, None] != model.patches[None, :, :]), axis=1)
+        diff = difference(x[:, :, None], model.patches[None, :, :], True, model.costs)
+        return np.sum((w**2)[:, :, None] * diff, axis=1)
     diff = w[:, :, None] * (x[:, :, None] - model.patches[None, :, :])  # (m, R, n)
     return np.sum(diff**2, axis=1)
 
@@ -53,7 +54,8 @@ def parzen(model: ScaleModel, a: np.ndarray, keep: np.ndarray | None = None) -> 
     neighbourhood distance to every site, *a* ``(m, n)``: the Parzen sum over the sites, or
     over those where *keep* ``(m, n)`` is True, or, if *keep* is a float array, with each
     site's term multiplied by it (0: left out)."""
-    dist = difference(model.labels[None, :, None], model.centres[None, None, :], model.mismatch) + a[:, None, :]
+    dist = (difference(model.labels[None, :, None], model.centres[None, None, :], model.mismatch, model.costs)
+            + a[:, None, :])
     logw = -dist / (2.0 * model.bandwidth**2)
     if keep is not None:
         with np.errstate(divide="ignore"):

@@ -18,7 +18,8 @@
  *   NLMAX  largest number of labels
  *   NVIEW  number of constrained views (2 or 3)
  *   NS     windows per source in the pruned sum's candidate sets (clsolid.ml.pruned)
- *   MISMATCH  1: values differ by [a != b] instead of (a - b)^2 (clsolid.ml.model.difference)
+ *   MISMATCH  1: values differ by [a != b] instead of (a - b)^2, 2: by [a != b] (COST[a] + COST[b])
+ *          (clsolid.ml.model.difference); COSTS then lists COST[label] (labels 0..L-1)
  */
 #define CAT_(a, b) a##b
 #define CAT(a, b) CAT_(a, b)
@@ -122,7 +123,14 @@ inline void add_chunk(floatv a, float cmin, float k, float *gmin, float *gsum)
 /* A neighbour's pair (xw, w) from its value x and weight wr = 1 - t: (wr x, wr) for squared
  * differences, (x, wr^2) for mismatches; ADD_TERM then adds wr^2 (x - p)^2 or wr^2 [x != p]
  * to acc, for the exemplar values p (of type T); KDIST(k, a, b) is k (a - b)^2 or k [a != b]. */
-#if MISMATCH
+#if MISMATCH == 2
+/* weighted: exemplar values arrive as their labels' costs (COSTS, distinct); a voxel's value,
+ * a label 0..L-1, is looked up, and a mismatch costs the sum of the two */
+__constant float COST[] = {COSTS};
+#define PAIR(x, wr, xw, w) { xw = COST[(int)(x)]; w = (wr) * (wr); }
+#define ADD_TERM(T, acc, xw, w, p) { acc += select((T)(0.0f), (w) * ((T)(xw) + (p)), (p) != (T)(xw)); }
+#define KDIST(k, a, b) ((a) != (b) ? (k) * (COST[(int)(a)] + COST[(int)(b)]) : 0.0f)
+#elif MISMATCH
 #define PAIR(x, wr, xw, w) { xw = (x); w = (wr) * (wr); }
 #define ADD_TERM(T, acc, xw, w, p) { acc += select((T)(0.0f), (T)(w), (p) != (T)(xw)); }
 #define KDIST(k, a, b) ((a) != (b) ? (k) : 0.0f)
