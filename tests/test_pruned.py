@@ -198,12 +198,14 @@ def test_pruned_synthesis_keeps_the_material(device, name):
     assert abs(runs[0].astype(float).std() - ex.std()) < 0.15 * ex.std()
 
 
-def test_pruned_run_resumes_identically(tmp_path, device):
+@pytest.mark.parametrize("name", ["porous50", "composite3"])  # composite3: the weighted distance
+def test_pruned_run_resumes_identically(tmp_path, device, name):
     from clsolid.gallery import gallery_exemplar
 
-    ex = gallery_exemplar("porous50", 64)
+    ex = gallery_exemplar(name, 64)
     kw = dict(rng=2, device=device, likelihood="pruned", scales=2, full_output=True)
     whole = clsolid.synthesize(ex, (16, 16, 16), **kw)
+    assert whole.params["distance"] == ("weighted" if name == "composite3" else "mismatch")
     seen = []
 
     def stop(info):

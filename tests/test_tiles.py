@@ -91,6 +91,8 @@ CASES = [  # each relaxation with 2 and 3 views, exact and pruned; balance on (t
     dict(relaxation="gibbs", views=3, likelihood="exact", tile=10),
     dict(relaxation="annealing", views=2, likelihood="exact", tile=7),
     dict(relaxation="annealing", views=3, likelihood="pruned", tile=8),
+    dict(relaxation="gibbs", views=2, likelihood="pruned", distance="weighted", tile=8),
+    dict(relaxation="gibbs", views=3, likelihood="exact", distance="mismatch", tile=10),
 ]
 
 
