@@ -19,7 +19,7 @@ from clsolid.ml.params import RELAXATIONS
 SHAPE = (32, 32, 32)
 FAST: dict = {}
 THESIS = dict(relaxation="icm", balance=0.0, slice_layout="aligned", insert_slices=4, likelihood="exact",
-              neighborhood=9)
+              neighborhood=9, distance="squared")
 MATERIALS = ("composite3", "fibres", "porous80")
 
 
