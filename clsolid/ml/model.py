@@ -9,8 +9,9 @@ thesis_spec §2.2 (TIP14 eqs. 3-9) for voxel s, view v and label lambda is
 over every exemplar site p whose k x k window lies inside the exemplar, with c_p the
 site's centre value and y_{p,r} its neighbour r. The constant 1/(n h^d) cancels in
 every heuristic and is dropped. With ``distance="mismatch"`` every squared difference
-(a - b)^2 above is [a != b] instead (:func:`difference`), and the bandwidth is taken in
-those units (:func:`phase_sigma`).
+(a - b)^2 above is [a != b] instead, with ``"weighted"`` [a != b] (c_a + c_b)
+(:func:`difference`, :func:`phase_costs`), and the bandwidth is taken in those units
+(:func:`phase_sigma`).
 """
 
 from __future__ import annotations
@@ -132,7 +133,7 @@ def scale_exemplar(labels_img: np.ndarray, level: int, pyramid: str = "binomial"
     halving, so thin features survive as fainter ones instead of vanishing where they fall
     on odd pixels; the result is rounded to the nearest grey level of *labels_img*, because
     the engine only ever writes those levels. With *phases* (the levels are names, as for
-    ``distance="mismatch"``) each level's indicator is smoothed instead, and each pixel
+    ``distance="mismatch"`` and ``"weighted"``) each level's indicator is smoothed instead, and each pixel
     takes the level of the largest (the lowest on a tie): averaging phases' values would
     invent a phase where two others meet (matrix 0 beside particle 2 is not phase 1). On
     two levels both round alike.
