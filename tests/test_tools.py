@@ -123,3 +123,27 @@ def test_bench_scale_runs_tiles_alone_and_says_every_sweep(capsys, device, tool)
     assert "scale 1/" in captured.err and "visits" in captured.err
     with pytest.raises(SystemExit):
         bench.main(["--tiled-only"])  # needs --tile
+
+
+def test_gallery_counts_targets_seed_by_seed(tool):
+    """With several seeds the table shows each exemplar's worst seed, and the counts come both
+    from those worst cells and from each seed's own runs."""
+    gallery = tool("gallery")
+
+    def run(mirror, patch):
+        scores = {v: {key: None for key, _ in gallery.SCORES} for v in gallery.VIEWS}
+        for v in gallery.VIEWS:
+            scores[v]["patch_sw"] = patch
+        return {"phase_error_pp": 0.5, "scores": scores, "mirror_max": mirror, "mirror_chance": 0.05,
+                "copy": {"fraction": 0.5, "view": "front", "index": 3, "inserted": False, "chance": 0.4},
+                "seconds": 1.0, "constrained": ["front", "right"]}
+
+    runs = {"porous80": [run(0.05, 0.1), run(0.2, 0.1)],   # the mirror missed on seed 2 only
+            "inclusions": [run(0.15, 0.1), run(0.05, 0.5)]}  # the mirror on seed 1, patches on seed 2
+    rows = {name: gallery.summarise(r) for name, r in runs.items()}
+    settings = {"method": "ml", "size": 64, "shape": 48, "seeds": [1, 2], "options": {}, "device": "x"}
+    table = gallery.markdown(rows, settings, runs)
+    assert "- mirror <= 0.1: 0/2\n" in table and "- patch <= 0.3: 1/2\n" in table  # worst cells
+    assert "Seed by seed (1, 2):" in table
+    assert "- mirror <= 0.1: 1/2 · 1/2\n" in table and "- patch <= 0.3: 2/2 · 1/2\n" in table
+    assert "Seed by seed" not in gallery.markdown(rows, dict(settings, seeds=[1]), runs)
