@@ -236,7 +236,7 @@ def synthesize(
         ``insert_spacing`` (the thesis's ``+in``: the exemplar is tiled onto one slice of
         each constrained view about every this many voxels of its depth axis, on
         multiples of 2^(scales-1), and trusted (t = 0) at the start of every scale;
-        default 6), ``insert_slices`` (a number of such slices per view instead; 0 gives
+        default 5 for categorical exemplars, 6 for grey ones, README Choices), ``insert_slices`` (a number of such slices per view instead; 0 gives
         the ``-in`` start, which collapses to the majority), ``slice_layout`` (``"staggered"``,
         the default: each view's slices between the other's, each with its own seeded
         shift of the exemplar; ``"aligned"``: the same depths and tiling in every view, as

@@ -115,8 +115,8 @@ def _add_synth(sub) -> None:
                    help="voxels from the coarser scale: re-synthesised with t=0, or fixed (default %(default)s)")
     p.add_argument("--insert-spacing", type=float, default=d.insert_spacing,
                    help="+in: an exemplar slice, trusted, about every this many voxels of each constrained "
-                        "view's depth (default %(default)s); the search methods' anchor slices (kopf: 6 by "
-                        "default; wl, chen-wang: none unless given; 0 = none)")
+                        "view's depth (default: 5 for categorical exemplars, 6 for grey ones); the search "
+                        "methods' anchor slices (kopf: 6 by default; wl, chen-wang: none unless given; 0 = none)")
     p.add_argument("--insert-slices", type=int, default=d.insert_slices,
                    help="+in: this many slices per constrained view instead of --insert-spacing; 0 = noise only (-in)")
     p.add_argument("--slice-layout", choices=SLICE_LAYOUTS, default=d.slice_layout,

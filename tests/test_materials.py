@@ -176,3 +176,14 @@ def test_a_material_does_not_depend_on_the_values_of_its_phases(device):
                           exclude=inserted_slices(res.params, vol.shape))
         scores.append(max(report["views"][v]["distances"]["c2_l2"]["score"] for v in ("front", "right")))
     assert abs(scores[0] - scores[1]) <= 0.1, f"C2 {scores[0]:.2f} against {scores[1]:.2f} with the values swapped"
+
+
+@pytest.mark.parametrize("name, levels, spacing", [("porous50", 32, 5.0), ("composite4", 32, 5.0),
+                                                   ("gravel", 32, 6.0), ("composite3", 2, 6.0)])
+def test_slice_spacing_follows_the_exemplar(device, name, levels, spacing):
+    """+in slices every 5 voxels on categorical exemplars, every 6 on grey ones (README, Choices);
+    a spacing given is kept."""
+    ex = gallery_exemplar(name, 64)
+    kw = dict(rng=1, device=device, scales=1, neighborhood=3, levels=levels, max_sweeps=1, full_output=True)
+    assert clsolid.synthesize(ex, (8, 8, 8), **kw).params["insert_spacing"] == spacing
+    assert clsolid.synthesize(ex, (8, 8, 8), insert_spacing=9, **kw).params["insert_spacing"] == 9.0

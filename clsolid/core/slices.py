@@ -33,11 +33,17 @@ def _view_offset(plan: Any, view: str) -> float:
     return plan.view_names.index(view) / plan.views if plan.slice_layout == "staggered" else 0.0
 
 
+#: Voxels between a view's ``+in`` slices when a plan leaves the spacing to its exemplar
+#: (``insert_spacing=None``) and nothing resolved it (``MLParams.for_exemplar`` does).
+FALLBACK_SPACING = 6.0
+
+
 def slice_count(size: int, plan: Any) -> int:
     """How many ``+in`` slices a view gets along a depth axis of *size* voxels (full resolution)."""
     if plan.insert_slices is not None:
         return plan.insert_slices
-    return max(1, round(size / plan.insert_spacing))
+    spacing = FALLBACK_SPACING if plan.insert_spacing is None else plan.insert_spacing
+    return max(1, round(size / spacing))
 
 
 def inserted_depths(shape: tuple[int, int, int], plan: Any) -> dict[str, np.ndarray]:

@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 from ..core.checks import int_in, one_of
 from ..core.views import DEPTH_AXIS, VIEW_AXES, VIEW_SETS  # noqa: F401 (this method's names too)
+from ..core.slices import FALLBACK_SPACING
 from ..errors import InputError
 
 #: clsolid name -> (kernel code, thesis tag, paper tag). One table, used by the API, the CLI,
@@ -41,7 +42,12 @@ INHERITED = ("resynthesize", "fixed")
 # insert_slices overrides it). Four slices a view at 48^3 (one every 12) left 6 of the 15
 # gallery exemplars above 0.1 mirror correlation, one every 8 left 3, one every 6 none:
 # each slice anchors content that no x<->z-symmetric state shares (README, Choices).
-DEFAULT_INSERT_SPACING = 6.0
+DEFAULT_INSERT_SPACING = FALLBACK_SPACING
+# Categorical exemplars (those the pruned sum takes): one every 5. Over seeds 1-6 on the ten
+# categorical gallery exemplars it met the mirror target in 55 of 60 runs against 48, C2 in
+# 48 against 44, the rest alike; on grey ones (brick, hrtem) it gained nothing and cut their
+# structure a little (autocorrelation misses 4 -> 6 of 12 runs), so they keep 6 (README, Choices).
+CATEGORICAL_INSERT_SPACING = 5.0
 #: How the exemplar of each coarser scale is made. "binomial" low-passes with [1 2 1]/4 before
 #: keeping the even pixels (a Gaussian pyramid, thesis ch. 3); "decimate" keeps them unfiltered
 #: (thesis §2.5). One-pixel lines, like brick's mortar, vanish at random under plain decimation.
@@ -109,7 +115,7 @@ class MLParams:
     upsampling: str | None = None
     inherited: str = "resynthesize"
     insert_slices: int | None = None
-    insert_spacing: float = DEFAULT_INSERT_SPACING
+    insert_spacing: float | None = None  # None: by the exemplar (for_exemplar), else DEFAULT_INSERT_SPACING
     slice_layout: str = "staggered"
     initial_temperature: float = 1.0
     bandwidth_factor: float | tuple[float, ...] | None = None
@@ -144,7 +150,7 @@ class MLParams:
         one_of("inherited", self.inherited, INHERITED)
         if self.insert_slices is not None:
             int_in("insert_slices", self.insert_slices, 0)
-        if not (_real(self.insert_spacing) and self.insert_spacing >= 1):
+        if self.insert_spacing is not None and not (_real(self.insert_spacing) and self.insert_spacing >= 1):
             raise InputError(f"insert_spacing={self.insert_spacing!r} must be a number >= 1 (voxels between "
                              "a view's +in slices); insert_slices=0 gives no slices")
         one_of("slice_layout", self.slice_layout, SLICE_LAYOUTS)
@@ -197,15 +203,18 @@ class MLParams:
         return tuple(float(v) for v in values)
 
     def for_exemplar(self, n_levels: int, categorical: bool) -> "MLParams":
-        """These parameters with ``likelihood="auto"`` and ``distance="auto"`` resolved for an
-        exemplar of *n_levels* levels, *categorical* if they are its own values (not a
-        quantisation of grey ones)."""
+        """These parameters with ``likelihood="auto"``, ``distance="auto"`` and
+        ``insert_spacing=None`` resolved for an exemplar of *n_levels* levels, *categorical* if
+        they are its own values (not a quantisation of grey ones)."""
         phases = categorical and n_levels <= AUTO_PRUNED_LEVELS
         likelihood = ("pruned" if phases else "exact") if self.likelihood == "auto" else self.likelihood
         # On two phases the weights are one constant: the plain count is the same distance.
         counted = "weighted" if n_levels > 2 else "mismatch"
         distance = (counted if phases else "squared") if self.distance == "auto" else self.distance
-        return replace(self, likelihood=likelihood, distance=distance)
+        spacing = self.insert_spacing
+        if spacing is None:
+            spacing = CATEGORICAL_INSERT_SPACING if phases else DEFAULT_INSERT_SPACING
+        return replace(self, likelihood=likelihood, distance=distance, insert_spacing=spacing)
 
     @property
     def view_names(self) -> tuple[str, ...]:
