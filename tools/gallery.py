@@ -174,16 +174,16 @@ def _fmt(x: float | None, digits: int = 2) -> str:
     return "–" if x is None else f"{x:.{digits}f}"
 
 
-def target_counts(rows: dict[str, dict]) -> list[tuple[str, str]]:
-    """For every target and yardstick, its label and how many of *rows* meet it ("k/n", and
-    how many could not be judged)."""
+def target_counts(rows: dict[str, dict]) -> list[tuple[str, str, str]]:
+    """For every target and yardstick: its label, how many of *rows* meet it of those judged
+    ("k/n"), and how many could not be judged and why ("" if none)."""
     out = []
     for key, label, limit, strict in TARGETS + YARDSTICKS:
         verdicts = [meets(row, key, limit, strict) for row in rows.values()]
         judged = [v for v in verdicts if v is not None]
         left = len(verdicts) - len(judged)
         why = "grey, not applicable" if key == "phase_error_pp" else "not measurable"
-        out.append((label, f"{sum(judged)}/{len(judged)}" + (f" ({left} {why})" if left else "")))
+        out.append((label, f"{sum(judged)}/{len(judged)}", f" ({left} {why})" if left else ""))
     return out
 
 
@@ -221,13 +221,13 @@ def markdown(rows: dict[str, dict], settings: dict, runs: dict[str, list[dict]] 
                      + f" | {_fmt(row['mirror'])} ({_fmt(row['mirror_chance'])}) | {copy} | {row['seconds']:.1f} |")
     lines += ["", "Targets met (scores in the constrained views"
               + ("; every exemplar's worst seed):" if len(settings["seeds"]) > 1 else "):"), ""]
-    lines += [f"- {label}: {count}" for label, count in target_counts(rows)]
+    lines += [f"- {label}: {count}{unjudged}" for label, count, unjudged in target_counts(rows)]
     if runs and len(settings["seeds"]) > 1:  # the worst seed of each exemplar is not one seed's block
         per_seed = [target_counts({name: summarise([r[i]]) for name, r in runs.items()})
                     for i in range(len(settings["seeds"]))]
         lines += ["", "Seed by seed (" + ", ".join(str(s) for s in settings["seeds"]) + "):", ""]
-        lines += [f"- {label}: " + " · ".join(counts[j][1].split(" (")[0] for counts in per_seed)
-                  for j, (label, _) in enumerate(per_seed[0])]
+        lines += [f"- {label}: " + " · ".join(counts[j][1] for counts in per_seed)
+                  for j, (label, _, _) in enumerate(per_seed[0])]
     return "\n".join(lines) + "\n"
 
 
