@@ -29,7 +29,7 @@ _SEARCH_REPORTS = ("site_map",)
 #: thesis case is 9; the search methods: ch5_np_common's 7).
 DEFAULT_NEIGHBORHOOD = {"ml": MLParams().neighborhood, "wl": 7, "kopf": 7, "chen-wang": 7}
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
-               "insert_spacing",
+               "insert_spacing", "insert_piece",
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
                "prune_similar", "prune_sample", "prune_min_weight")
@@ -138,9 +138,10 @@ def synthesize(
 
     The defaults depart from the published method where the gallery of exemplars
     (``tools/gallery.py``) showed it fails: Gibbs draws instead of ICM's argmax, a
-    label-histogram balance, and dense, staggered ``+in`` slices. ``relaxation="icm",
-    balance=0, slice_layout="aligned", insert_slices=4`` (with ``bandwidth_factor=1,
-    pyramid="decimate"``) is the thesis's form. See the README, Choices.
+    label-histogram balance, dense, staggered ``+in`` slices and, on categorical
+    exemplars, phase mismatches instead of squared differences. ``relaxation="icm",
+    balance=0, slice_layout="aligned", insert_slices=4, distance="squared"`` (with ``bandwidth_factor=1, pyramid="decimate"``) is the thesis's
+    form. See the README, Choices.
 
     Parameters
     ----------
@@ -241,6 +242,9 @@ def synthesize(
         the default: each view's slices between the other's, each with its own seeded
         shift of the exemplar; ``"aligned"``: the same depths and tiling in every view, as
         the thesis, which makes the block nearly its own x<->z mirror image),
+        ``insert_piece`` (0, the default: each ``+in`` slice one exemplar window, as the
+        thesis; N: a mosaic of N x N pieces, each from its own seeded window, N a multiple
+        of 2^(scales-1), so that no slice starts as a copy of one window; README Choices),
         ``initial_temperature`` (1),
         ``bandwidth`` (Parzen h, one value or one per scale finest first; default
         ``bandwidth_factor`` x Silverman's rule per scale), ``bandwidth_factor`` (multiplies

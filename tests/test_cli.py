@@ -95,6 +95,8 @@ def test_same_seed_same_file(tmp_path, device):
      "likelihood", "pruned"),
     ([], "distance", "squared"),  # brick is grey: auto squares the differences
     (["--distance", "mismatch"], "distance", "mismatch"),
+    ([], "insert_piece", 0),  # each +in slice one exemplar window
+    (["--insert-piece", "4"], "insert_piece", 4),
 ])
 def test_method_options_reach_the_sidecar(tmp_path, device, argv, key, expected):
     assert main(["synth", "-o", str(tmp_path / "v.npy"), *FAST, "-q", *argv]) == 0

@@ -181,9 +181,11 @@ def test_a_material_does_not_depend_on_the_values_of_its_phases(device):
 @pytest.mark.parametrize("name, levels, spacing", [("porous50", 32, 5.0), ("composite4", 32, 5.0),
                                                    ("gravel", 32, 6.0), ("composite3", 2, 6.0)])
 def test_slice_spacing_follows_the_exemplar(device, name, levels, spacing):
-    """+in slices every 5 voxels on categorical exemplars, every 6 on grey ones (README, Choices);
-    a spacing given is kept."""
+    """+in slices every 5 voxels on categorical exemplars, every 6 on grey ones (README, Choices),
+    whole exemplar windows on both; a spacing or piece given is kept."""
     ex = gallery_exemplar(name, 64)
     kw = dict(rng=1, device=device, scales=1, neighborhood=3, levels=levels, max_sweeps=1, full_output=True)
-    assert clsolid.synthesize(ex, (8, 8, 8), **kw).params["insert_spacing"] == spacing
-    assert clsolid.synthesize(ex, (8, 8, 8), insert_spacing=9, **kw).params["insert_spacing"] == 9.0
+    params = clsolid.synthesize(ex, (8, 8, 8), **kw).params
+    assert (params["insert_spacing"], params["insert_piece"]) == (spacing, 0)
+    params = clsolid.synthesize(ex, (8, 8, 8), insert_spacing=9, insert_piece=4, **kw).params
+    assert (params["insert_spacing"], params["insert_piece"]) == (9.0, 4)

@@ -130,3 +130,45 @@ def test_staggered_slices_break_the_x_z_symmetry_consistently_across_scales(bric
     assert shifts[0] == shifts[1] == shifts[2]  # the same full-resolution shifts at every scale
     assert len(set(shifts[0])) > 1  # slices show different parts of the exemplar
     assert not np.array_equal(inserted_depths(shape, MLParams())["front"], depths["right"])
+
+
+def test_pieced_slices_are_mosaics_of_windows_the_same_at_every_scale():
+    """insert_piece: each piece of a +in slice is its own exemplar window, the same one at every scale."""
+    labels = np.arange(256).reshape(16, 16)  # every pixel its own label: a value says where it came from
+    params = MLParams(neighborhood=3, scales=3, insert_slices=2, max_sweeps=1, insert_piece=8, pyramid="decimate",
+                      balance=0.0)
+    shape = (16, 24, 16)
+    starts = scale_starts(labels, shape, params)
+    depths = inserted_depths(shape, params)
+    per_scale = []
+    for model, vol, temp in starts:
+        f = 2**model.level
+        cell = 8 // f
+        Z, Y, X = model.shape
+        free = np.setdiff1d(np.arange(X), depths["right"] // f)  # the right view's slices cross the front's
+        shifts = []
+        for z in depths["front"] // f:
+            for pr in range(-(-Y // cell)):
+                for pc in range(-(-X // cell)):
+                    r = np.arange(pr * cell, min(Y, (pr + 1) * cell))
+                    c = np.intersect1d(np.arange(pc * cell, min(X, (pc + 1) * cell)), free)
+                    v = int(vol[z, r[0], c[0]])
+                    s = ((v // 16 - r[0] * f) % 16, (v % 16 - c[0] * f) % 16)  # full-resolution shift
+                    assert s[0] % 4 == 0 and s[1] % 4 == 0  # on multiples of 2^(scales-1)
+                    window = ((r[:, None] * f + s[0]) % 16) * 16 + (c[None, :] * f + s[1]) % 16
+                    np.testing.assert_array_equal(vol[z][np.ix_(r, c)], window)
+                    shifts.append(s)
+            assert (temp[z] == 0).all()
+        per_scale.append(shifts)
+    assert per_scale[0] == per_scale[1] == per_scale[2]  # the same full-resolution windows at every scale
+    assert len(set(per_scale[0])) > len(depths["front"])  # a slice is more than one window
+
+
+def test_piece_side_is_checked():
+    with pytest.raises(InputError, match="multiple of 2"):
+        MLParams(scales=3, insert_piece=6)
+    with pytest.raises(InputError, match="insert_piece"):
+        MLParams(insert_piece=-4)
+    with pytest.raises(InputError, match="insert_piece"):
+        MLParams(insert_piece=4.0)
+    assert MLParams().insert_piece == 0 and MLParams(scales=6, insert_piece=64).insert_piece == 64

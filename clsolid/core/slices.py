@@ -4,9 +4,10 @@ against mirror-image blocks, the search methods (README, Choices).
 
 The functions take a *plan*: any parameters object with ``scales``, ``views`` (2 or 3),
 ``view_names``, ``slice_layout`` (``"aligned"`` or ``"staggered"``), ``insert_slices`` (a
-count per view, or None) and ``insert_spacing`` (voxels between a view's slices, used when
-the count is None): :class:`clsolid.ml.params.MLParams` and
-:class:`clsolid.search.params.SearchParams` both are.
+count per view, or None), ``insert_spacing`` (voxels between a view's slices, used when
+the count is None) and ``insert_piece`` (0: each slice one exemplar window; else the side
+of the square pieces, each from its own window, that a slice is made of):
+:class:`clsolid.ml.params.MLParams` and :class:`clsolid.search.params.SearchParams` both are.
 """
 
 from __future__ import annotations
@@ -79,20 +80,30 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, plan: Any, level: int
     """``+in``: tile the exemplar onto the ``+in`` slices of each constrained view.
 
     Called at every scale with that scale's exemplar: the depths (:func:`inserted_depths`
-    of the full-resolution *full_shape*) and tile shifts are the full-resolution ones
-    divided by 2^level (all multiples of 2^(scales-1)), so each slice
+    of the full-resolution *full_shape*), the tile shifts and the pieces are the
+    full-resolution ones divided by 2^level (all multiples of 2^(scales-1)), so each slice
     persists from the coarsest scale down. With ``slice_layout="staggered"`` the views'
     slices sit at different depths and each shows the exemplar shifted by its own seeded
-    offset, so that nothing maps the x axis onto z. Returns the mask of inserted voxels;
-    they start each scale trusted (t = 0), like inherited voxels: under ICM a voxel at
-    t = 1 ignores its neighbours, so untrusted slices would be overwritten unseen.
+    offset, so that nothing maps the x axis onto z. With ``insert_piece`` > 0 a slice is a
+    mosaic of square pieces of that side, each from its own seeded window of the exemplar,
+    so that no slice starts as one window (the relaxation sews the seams). Returns the mask
+    of inserted voxels; they start each scale trusted (t = 0), like inherited voxels: under
+    ICM a voxel at t = 1 ignores its neighbours, so untrusted slices would be overwritten
+    unseen.
     """
     mask = np.zeros(vol.shape, bool)
     step = 2 ** (plan.scales - 1 - level)
     shift_rng = np.random.default_rng([seed, 0x1A5E])  # the same draws at every scale
-    ex_slots = [-(-n // step) for n in labels_img.shape]
+    ex_slots = np.array([-(-n // step) for n in labels_img.shape])
+    piece = int(plan.insert_piece)
 
-    def tiled(rows: int, cols: int) -> np.ndarray:
+    def tiled(rows: int, cols: int, full_rows: int, full_cols: int) -> np.ndarray:
+        if piece:  # one seeded shift per piece, drawn for the full-resolution grid of pieces
+            grid = shift_rng.integers(0, ex_slots, size=(-(-full_rows // piece), -(-full_cols // piece), 2))
+            cell = piece >> level
+            r, c = np.arange(rows)[:, None], np.arange(cols)[None, :]
+            shift = grid[r // cell, c // cell] * step
+            return labels_img[(r + shift[..., 0]) % labels_img.shape[0], (c + shift[..., 1]) % labels_img.shape[1]]
         shift = [0, 0]
         if plan.slice_layout == "staggered":
             shift = [int(shift_rng.integers(0, n)) * step for n in ex_slots]
@@ -100,12 +111,13 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, plan: Any, level: int
         return np.tile(labels_img, reps)[shift[0]: shift[0] + rows, shift[1]: shift[1] + cols]
 
     Z, Y, X = vol.shape
+    FZ, FY, FX = full_shape
     for view, full_depths in inserted_depths(full_shape, plan).items():
         for d in full_depths // 2**level:
             if view == "front":
-                vol[d], mask[d] = tiled(Y, X), True
+                vol[d], mask[d] = tiled(Y, X, FY, FX), True
             elif view == "right":
-                vol[:, :, d], mask[:, :, d] = tiled(Y, Z).T, True
+                vol[:, :, d], mask[:, :, d] = tiled(Y, Z, FY, FZ).T, True
             else:
-                vol[:, d, :], mask[:, d, :] = tiled(Z, X), True
+                vol[:, d, :], mask[:, d, :] = tiled(Z, X, FZ, FX), True
     return mask

@@ -117,6 +117,7 @@ class MLParams:
     insert_slices: int | None = None
     insert_spacing: float | None = None  # None: by the exemplar (for_exemplar), else DEFAULT_INSERT_SPACING
     slice_layout: str = "staggered"
+    insert_piece: int = 0  # 0: each +in slice one exemplar window; N: N x N pieces (README, Choices)
     initial_temperature: float = 1.0
     bandwidth_factor: float | tuple[float, ...] | None = None
     bandwidth: tuple[float, ...] | None = field(default=None)
@@ -154,6 +155,10 @@ class MLParams:
             raise InputError(f"insert_spacing={self.insert_spacing!r} must be a number >= 1 (voxels between "
                              "a view's +in slices); insert_slices=0 gives no slices")
         one_of("slice_layout", self.slice_layout, SLICE_LAYOUTS)
+        if int_in("insert_piece", self.insert_piece, 0) % 2 ** (self.scales - 1):
+            raise InputError(f"insert_piece={self.insert_piece!r} must be 0 (whole exemplar windows) or a "
+                             f"multiple of 2^(scales-1) = {2 ** (self.scales - 1)}, so that every scale "
+                             "has the same pieces")
         t0 = self.initial_temperature
         if not (isinstance(t0, numbers.Real) and 0 < t0 <= 1):
             raise InputError(f"initial_temperature={t0!r} must be in (0, 1] (1 = no confidence, the thesis)")

@@ -145,9 +145,10 @@ class SearchParams:
     balance: float | None = None
     insert_spacing: float | None = None
 
-    #: The anchor slices' layout and count (read by :mod:`clsolid.core.slices`): always
-    #: staggered, their number set by ``insert_spacing``.
+    #: The anchor slices' layout, count and make (read by :mod:`clsolid.core.slices`): always
+    #: staggered, their number set by ``insert_spacing``, each slice one exemplar window.
     slice_layout = "staggered"
+    insert_piece = 0
 
     def __post_init__(self) -> None:
         one_of("method", self.method, METHODS)
