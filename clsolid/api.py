@@ -140,8 +140,9 @@ def synthesize(
     (``tools/gallery.py``) showed it fails: Gibbs draws instead of ICM's argmax, a
     label-histogram balance, dense, staggered ``+in`` slices and, on categorical
     exemplars, phase mismatches instead of squared differences. ``relaxation="icm",
-    balance=0, slice_layout="aligned", insert_slices=4, distance="squared"`` (with ``bandwidth_factor=1, pyramid="decimate"``) is the thesis's
-    form. See the README, Choices.
+    balance=0, slice_layout="aligned", insert_slices=4, distance="squared"`` (with
+    ``bandwidth_factor=1, pyramid="decimate"``) is the thesis's form. See the README,
+    Choices.
 
     Parameters
     ----------
@@ -237,8 +238,9 @@ def synthesize(
         ``insert_spacing`` (the thesis's ``+in``: the exemplar is tiled onto one slice of
         each constrained view about every this many voxels of its depth axis, on
         multiples of 2^(scales-1), and trusted (t = 0) at the start of every scale;
-        default 5 for categorical exemplars, 6 for grey ones, README Choices), ``insert_slices`` (a number of such slices per view instead; 0 gives
-        the ``-in`` start, which collapses to the majority), ``slice_layout`` (``"staggered"``,
+        default 5 for categorical exemplars, 6 for grey ones, README Choices),
+        ``insert_slices`` (a number of such slices per view instead; 0 gives the ``-in``
+        start, which collapses to the majority), ``slice_layout`` (``"staggered"``,
         the default: each view's slices between the other's, each with its own seeded
         shift of the exemplar; ``"aligned"``: the same depths and tiling in every view, as
         the thesis, which makes the block nearly its own x<->z mirror image),

@@ -294,7 +294,8 @@ def _tracker(levels: int, records: list):
 
 #: Flags that only one method reads: given to the other, they are an error, not ignored.
 _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited",
-            "insert_slices", "insert_spacing", "insert_piece", "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor",
+            "insert_slices", "insert_spacing", "insert_piece", "slice_layout", "initial_temperature", "bandwidth",
+            "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
             "prune_similar", "prune_sample", "prune_min_weight", "tile", "scheduler", "workers", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram", "candidates",
