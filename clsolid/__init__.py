@@ -7,7 +7,7 @@ Importing clsolid does not touch OpenCL; a device is chosen when a synthesis run
 from .api import resume, synthesize
 from .core.device import Device, list_devices, select_device
 from .errors import (ClsolidError, DeviceMemoryError, DeviceSkippedWarning, HostMemoryError, InputError,
-                     KernelBuildError, NoDeviceError)
+                     KernelBuildError, LargeTiffWarning, NoDeviceError)
 from .ml.params import HEURISTICS
 from .ml.driver import SweepInfo, SynthesisResult
 
@@ -16,5 +16,5 @@ __version__ = "0.1.0"
 __all__ = [
     "synthesize", "resume", "select_device", "list_devices", "Device", "SweepInfo", "SynthesisResult",
     "HEURISTICS", "ClsolidError", "InputError", "NoDeviceError", "DeviceMemoryError", "HostMemoryError",
-    "KernelBuildError", "DeviceSkippedWarning", "__version__",
+    "KernelBuildError", "DeviceSkippedWarning", "LargeTiffWarning", "__version__",
 ]

@@ -64,3 +64,7 @@ class KernelBuildError(ClsolidError, RuntimeError):
 
 class DeviceSkippedWarning(UserWarning):
     """Automatic device selection passed over a device that cannot compile kernels."""
+
+
+class LargeTiffWarning(UserWarning):
+    """A TIFF above 4 GiB was written in ImageJ's large-file form, which only some readers open whole."""

@@ -12,6 +12,7 @@ import json
 import math
 import os
 import pathlib
+import warnings
 from numbers import Real
 from typing import Any, Union
 
@@ -19,7 +20,7 @@ import numpy as np
 import tifffile
 from PIL import Image
 
-from .errors import InputError
+from .errors import InputError, LargeTiffWarning
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -304,7 +305,11 @@ def save_volume(
     TIFF: an ImageJ hyperstack with axes ``ZYX``. ImageJ stores only uint8,
     uint16 and float32 samples, so integer and bool volumes become ``uint8``
     when their values are in 0..255, else ``uint16`` when in 0..65535 (else
-    an error); floats become ``float32``.
+    an error); floats become ``float32``. ImageJ's TIFF is never BigTIFF: above
+    4 GiB of samples it is written in ImageJ's large-file form (one directory,
+    the planes stored contiguously), which ImageJ/Fiji, tifffile and
+    :func:`load_volume` read whole and other TIFF readers see as its first
+    plane; a :class:`~clsolid.LargeTiffWarning` says so.
 
     NPY: integer and bool volumes are narrowed the same way when they fit
     (else kept as they are); floats keep their dtype. A ``.npy`` file holds
@@ -346,7 +351,18 @@ def _write_imagej(
         ij_meta.update(spacing=z, unit=unit)
         # TIFF resolution is pixels per unit, the inverse of the pixel size.
         kwargs["resolution"] = (1.0 / x, 1.0 / y)
-    tifffile.imwrite(path, np.ascontiguousarray(volume), imagej=True, metadata=ij_meta, **kwargs)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tifffile.imwrite(path, np.ascontiguousarray(volume), imagej=True, metadata=ij_meta, **kwargs)
+    for w in caught:  # tifffile's own note on the large-file form says nothing a user can act on
+        if "truncating ImageJ file" in str(w.message):
+            warnings.warn(LargeTiffWarning(
+                f"{path}: {volume.nbytes / 2**30:.1f} GiB of samples, above the 4 GiB of a classic TIFF, written "
+                "in ImageJ's large-file form (one directory, the planes stored contiguously): ImageJ/Fiji, "
+                "tifffile and clsolid read it whole, other TIFF readers only its first plane; save as .npy for "
+                "those"), stacklevel=3)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 def load_volume(path: PathLike) -> tuple[np.ndarray, dict]:

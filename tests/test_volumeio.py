@@ -7,7 +7,11 @@ import pytest
 import tifffile
 from PIL import Image
 
-from clsolid.errors import InputError
+import os
+import shutil
+import warnings
+
+from clsolid.errors import InputError, LargeTiffWarning
 from clsolid.volumeio import load_volume, save_volume
 
 
@@ -97,6 +101,60 @@ def test_tif_labels_out_of_range(tmp_path, values):
     with pytest.raises(InputError, match="volume") as info:
         save_volume(tmp_path / "bad.tif", vol)
     assert str(values[0]) in str(info.value) and ".npy" in str(info.value)
+
+
+def test_small_tif_writes_no_warning(tmp_path, labels):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        save_volume(tmp_path / "v.tif", labels, voxel_size=0.5)
+
+
+def test_tifffile_large_file_note_becomes_ours(tmp_path, labels, monkeypatch):
+    """tifffile's "truncating ImageJ file" (its large-file form) reaches the user as a
+    LargeTiffWarning saying who can read the file; its other warnings pass unchanged."""
+    real = tifffile.imwrite
+
+    def noisy(*args, **kwargs):
+        warnings.warn("<TiffWriter> truncating ImageJ file", UserWarning)
+        warnings.warn("something else", RuntimeWarning)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(tifffile, "imwrite", noisy)
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        save_volume(tmp_path / "v.tif", labels)
+    assert [w.category for w in record] == [LargeTiffWarning, RuntimeWarning]
+    assert "first plane" in str(record[0].message) and "truncating" not in str(record[0].message)
+    assert str(record[1].message) == "something else"
+
+
+def _room(path, need: int) -> bool:
+    free_disk = shutil.disk_usage(path).free
+    try:
+        free_ram = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return False
+    return free_disk > need * 1.2 and free_ram > need * 2.5
+
+
+@pytest.mark.slow
+def test_tif_above_4_gib_round_trips(tmp_path):
+    """A volume above a classic TIFF's 4 GiB is written (ImageJ's large-file form, with the
+    warning) and read back whole, voxel size included."""
+    shape = (1040, 2048, 2048)  # 4.06 GiB of uint8
+    need = int(np.prod(shape))
+    if not _room(tmp_path, need):
+        pytest.skip("needs about 10 GiB of free memory and 5 GiB of disk")
+    vol = np.zeros(shape, np.uint8)
+    vol[0, 0, 0], vol[-1, -1, -1], vol[shape[0] // 2, 7, 9] = 1, 2, 3
+    with pytest.warns(LargeTiffWarning):
+        save_volume(tmp_path / "big.tif", vol, voxel_size=(2.0, 0.5, 0.5))
+    del vol
+    back, meta = load_volume(tmp_path / "big.tif")
+    assert back.shape == shape
+    assert (back[0, 0, 0], back[-1, -1, -1], back[shape[0] // 2, 7, 9]) == (1, 2, 3)
+    assert np.count_nonzero(back) == 3
+    assert meta["voxel_size"] == pytest.approx((2.0, 0.5, 0.5))
 
 
 def test_overwrite_is_allowed(tmp_path, labels):
