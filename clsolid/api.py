@@ -32,7 +32,7 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
                "insert_spacing", "insert_piece",
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
-               "prune_similar", "prune_sample", "prune_min_weight")
+               "prune_similar", "prune_sample", "prune_min_weight", "falloff")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
 _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
@@ -251,7 +251,10 @@ def synthesize(
         ``bandwidth`` (Parzen h, one value or one per scale finest first; default
         ``bandwidth_factor`` x Silverman's rule per scale), ``bandwidth_factor`` (multiplies
         Silverman's h; one value or one per scale finest first; default 0.2, where the
-        thesis uses 1: see the README, Quality), ``builtin_size``, and OpenCL tuning: ``vector_width``,
+        thesis uses 1: see the README, Quality), ``falloff`` (the sigma, in pixels of each
+        scale, of a Gaussian weight on each neighbourhood term by its distance from the
+        centre; default 3 for grey exemplars, 0 for categorical ones; 0 = every term alike,
+        the thesis: README Choices), ``builtin_size``, and OpenCL tuning: ``vector_width``,
         ``voxels_per_item``, ``local_size``, ``max_batch``.
 
         Tiles (issue 12): ``tile`` (default None: the block in one piece) synthesises the block

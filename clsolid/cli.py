@@ -164,6 +164,10 @@ def _add_synth(sub) -> None:
     p.add_argument("--prune-min-weight", type=float, default=d.prune_min_weight,
                    help="pruned: a neighbourhood whose mean (1 - t)^2 is below this gets the exact sum "
                         "(default %(default)s: never)")
+    p.add_argument("--falloff", type=float, default=d.falloff,
+                   help="Gaussian weight of each neighbourhood term by its distance from the centre, this "
+                        "sigma in pixels of each scale (default: 3 for grey exemplars, 0 for categorical "
+                        "ones); 0 = every term alike, the thesis")
     p.add_argument("--checkpoint", type=Path, default=None,
                    help="ml: save the run's state in this folder after every sweep (see --checkpoint-every), "
                         "so that --resume can go on after a crash or Ctrl-C")
@@ -297,7 +301,8 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "insert_slices", "insert_spacing", "insert_piece", "slice_layout", "initial_temperature", "bandwidth",
             "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
-            "prune_similar", "prune_sample", "prune_min_weight", "tile", "scheduler", "workers", "indices", "track")
+            "prune_similar", "prune_sample", "prune_min_weight", "falloff", "tile", "scheduler", "workers", "indices",
+            "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram", "candidates",
             "specify", "search", "exact_passes", "site_map", "source_map")
 
@@ -340,7 +345,7 @@ def _ml_options(args) -> dict:
                    relaxation=args.relaxation, anneal_start=args.anneal_start, anneal_cooling=args.anneal_cooling,
                    sweeps=args.sweeps, balance=args.balance, likelihood=args.likelihood,
                    distance=args.distance, prune_similar=args.prune_similar, prune_sample=args.prune_sample,
-                   prune_min_weight=args.prune_min_weight)
+                   prune_min_weight=args.prune_min_weight, falloff=args.falloff)
     if args.tile is not None:
         options["tile"] = args.tile
     for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale

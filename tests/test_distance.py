@@ -153,6 +153,24 @@ def test_auto_counts_mismatches_on_categorical_exemplars(device, name, levels, w
     assert res.params["distance"] == want
 
 
+@pytest.mark.parametrize("name, levels, given, want", [("brick", 32, None, 3.0), ("composite3", 32, None, 0.0),
+                                                       ("composite3", 2, None, 3.0), ("brick", 32, 0, 0.0),
+                                                       ("porous50", 32, 1.5, 1.5)])
+def test_auto_falloff_on_grey_exemplars_only(device, name, levels, given, want):
+    """The fall-off resolves like the distance: sigma 3 on grey exemplars (a quantised
+    categorical one included), none on categorical ones; a given value is kept."""
+    ex = gallery_exemplar(name, 64)
+    res = clsolid.synthesize(ex, (8, 8, 8), rng=1, device=device, scales=1, neighborhood=3, levels=levels,
+                             max_sweeps=1, full_output=True, **({} if given is None else {"falloff": given}))
+    assert res.params["falloff"] == want
+
+
+@pytest.mark.parametrize("bad", [-1.0, float("nan"), float("inf"), "3", True])
+def test_bad_falloff_is_refused(bad):
+    with pytest.raises(InputError, match="falloff"):
+        MLParams(falloff=bad)
+
+
 def test_bad_distance_is_refused():
     with pytest.raises(InputError, match="distance"):
         MLParams(distance="hamming")

@@ -19,12 +19,13 @@ def _pair(device, labels_img, shape, vol, temp, **kw):
     return model, cl_b, ref
 
 
-@pytest.mark.parametrize("k, views, distance", [(3, 2, "squared"), (5, 3, "squared"), (7, 2, "squared"),
-                                                (11, 2, "squared"), (5, 3, "mismatch"), (11, 2, "mismatch"),
-                                                (5, 3, "weighted"), (11, 2, "weighted")])
-def test_per_label_log_lcpdf_matches_reference(device, small_labels, k, views, distance):
+@pytest.mark.parametrize("k, views, distance, falloff", [
+    (3, 2, "squared", 0), (5, 3, "squared", 0), (7, 2, "squared", 0), (11, 2, "squared", 0), (5, 3, "mismatch", 0),
+    (11, 2, "mismatch", 0), (5, 3, "weighted", 0), (11, 2, "weighted", 0),
+    (11, 2, "squared", 3.0), (5, 3, "squared", 1.0), (7, 2, "mismatch", 2.0), (5, 3, "weighted", 1.5)])
+def test_per_label_log_lcpdf_matches_reference(device, small_labels, k, views, distance, falloff):
     shape = (7, 9, 11)
-    params = dict(neighborhood=k, views=views, scales=1, distance=distance)
+    params = dict(neighborhood=k, views=views, scales=1, distance=distance, falloff=falloff)
     model = build_scale(small_labels, shape, MLParams(**params), 0)
     vol, temp = random_state(model)
     model, cl_b, ref = _pair(device, small_labels, shape, vol, temp, **params)
@@ -52,6 +53,36 @@ def test_no_underflow_for_11x11_and_256_levels(device):
     got = cl_b.lcpdf(voxels)
     assert np.isfinite(got).all()
     np.testing.assert_allclose(got, want, rtol=2e-5, atol=1e-2)
+
+
+def test_falloff_weighs_each_term_by_its_gaussian(small_labels):
+    """The reference's distance with a fall-off is the plain one with neighbour r's term times
+    exp(-d_r^2 / (2 sigma^2)), scaled to a mean of 1; without one every term counts alike."""
+    from clsolid.ml.reference import site_distances
+
+    shape = (6, 7, 8)
+    plain = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, falloff=0), 0)
+    assert plain.term_weight is None
+    model = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, falloff=1.5), 0)
+    vol, temp = random_state(model, seed=4)
+    voxels = np.arange(0, vol.size, 5)
+    for view in range(2):
+        off = model.offsets[view]
+        d2 = np.sum(off.astype(float) ** 2, axis=1)
+        g = np.exp(-d2 / (2 * 1.5**2))
+        g /= g.mean()
+        np.testing.assert_allclose(model.term_weight, g, rtol=1e-12)
+        assert model.term_weight.mean() == pytest.approx(1.0)
+        # the row-major window: the four nearest neighbours weigh most, the corners least
+        assert np.argmax(model.term_weight) in np.flatnonzero(d2 == 1) and d2[np.argmin(model.term_weight)] == 8
+        # term by term, against the plain distance of one-neighbour models
+        want = np.zeros((voxels.size, model.n_sites))
+        for r in range(off.shape[0]):
+            one = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, falloff=0), 0)
+            one.offsets = model.offsets[:, r:r + 1]
+            one.patches = model.patches[r:r + 1]
+            want += g[r] * site_distances(one, vol, temp, voxels, view)
+        np.testing.assert_allclose(site_distances(model, vol, temp, voxels, view), want, rtol=1e-10)
 
 
 def test_group_tables_cover_every_site_once(small_labels):

@@ -78,13 +78,14 @@ def test_exact_kernel_records_the_nearest_site(device, small_labels):
     assert (cl_b.sources()[:, voxels] == ref.sources()[:, voxels]).mean() > 0.98
 
 
-@pytest.mark.parametrize("k, views, similar, sample, distance",
-                         [(3, 2, 1, 0, "squared"), (5, 3, 8, 0, "squared"), (7, 2, 16, 0, "squared"),
-                          (5, 2, 8, 64, "squared"), (7, 3, 4, 17, "squared"), (5, 3, 8, 0, "mismatch"),
-                          (7, 2, 4, 17, "mismatch"), (5, 2, 8, 17, "weighted")])
-def test_pruned_lcpdf_matches_reference(device, small_labels, k, views, similar, sample, distance):
+@pytest.mark.parametrize("k, views, similar, sample, distance, falloff",
+                         [(3, 2, 1, 0, "squared", 0), (5, 3, 8, 0, "squared", 0), (7, 2, 16, 0, "squared", 0),
+                          (5, 2, 8, 64, "squared", 0), (7, 3, 4, 17, "squared", 0), (5, 3, 8, 0, "mismatch", 0),
+                          (7, 2, 4, 17, "mismatch", 0), (5, 2, 8, 17, "weighted", 0), (7, 2, 8, 17, "squared", 2.0),
+                          (5, 3, 4, 0, "weighted", 1.0)])
+def test_pruned_lcpdf_matches_reference(device, small_labels, k, views, similar, sample, distance, falloff):
     params, model = _model(small_labels, neighborhood=k, views=views, likelihood="pruned", prune_similar=similar,
-                           prune_sample=sample, distance=distance)
+                           prune_sample=sample, distance=distance, falloff=falloff)
     vol, temp, sources = _state(model, seed=k)
     cl_b, ref = _backends(device, model, params, vol, temp, sources)
     voxels = np.flatnonzero(model.colour.ravel() == 0)
@@ -94,7 +95,8 @@ def test_pruned_lcpdf_matches_reference(device, small_labels, k, views, similar,
     # the new sources: the nearest candidate's (ties aside, the same)
     assert (cl_b.sources()[:, voxels] == ref.sources()[:, voxels]).mean() > 0.98
     exact = ReferenceBackend()
-    exact.start_scale(model, vol, temp, MLParams(scales=1, neighborhood=k, views=views, distance=distance))
+    exact.start_scale(model, vol, temp, MLParams(scales=1, neighborhood=k, views=views, distance=distance,
+                                                 falloff=falloff))
     assert not np.allclose(want, exact.lcpdf(voxels), atol=1e-3)  # it is pruned: candidates, not every site
 
 

@@ -107,6 +107,16 @@ def phase_sigma(image: np.ndarray, costs: np.ndarray | None = None) -> float:
     return float(np.sqrt(f @ d @ f / 2.0))
 
 
+def falloff_weights(offsets: np.ndarray, sigma: float) -> np.ndarray | None:
+    """``(R,)`` weight of each neighbour of a view's *offsets* ``(R, 3)``: a Gaussian of its
+    distance from the centre with this *sigma* (pixels), scaled to a mean of 1 so that the
+    distances, and with them Silverman's bandwidth, keep their size; None for sigma 0."""
+    if not sigma:
+        return None
+    g = np.exp(-np.sum(offsets.astype(np.float64) ** 2, axis=1) / (2.0 * sigma**2))
+    return g / g.mean()
+
+
 def silverman(sigma: float, n: int, d: int) -> float:
     """Silverman's bandwidth ``sigma * (4 / (n (d + 2)))^(1 / (d + 4))`` (TIP14 eq. 6)."""
     return float(sigma * (4.0 / (n * (d + 2))) ** (1.0 / (d + 4)))
@@ -178,6 +188,7 @@ class ScaleModel:
     n_sets: int  # conflict-free colour sets
     mismatch: bool = False  # distance="mismatch" or "weighted": [a != b] for (a - b)^2 (see difference)
     costs: np.ndarray | None = None  # distance="weighted": each label's half-cost (phase_costs)
+    term_weight: np.ndarray | None = None  # (R,) the fall-off's weight of each neighbour (falloff_weights)
 
     def coded(self, values: np.ndarray) -> np.ndarray:
         """Label *values* as the kernels compare them: themselves, or with :attr:`costs` their
@@ -250,4 +261,5 @@ def build_scale(
         n_sets=set_count(sshape, half),
         mismatch=mismatch,
         costs=costs,
+        term_weight=falloff_weights(offsets[0], params.falloff or 0.0),  # every view's rows pair alike
     )

@@ -135,6 +135,8 @@ class CLBackend:
             "NS": self.params.prune_similar if self.params.likelihood == "pruned" else 1,
             "MISMATCH": 2 if model.costs is not None else int(model.mismatch),
             **({"COSTS": ",".join(f"{c.item().hex()}f" for c in model.costs)} if model.costs is not None else {}),
+            **({"FALLOFF": ",".join(f"{float(np.float32(r)).hex()}f" for r in np.sqrt(model.term_weight))}
+               if model.term_weight is not None else {}),
         })
 
     def _pad(self, n: int) -> int:

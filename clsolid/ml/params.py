@@ -56,6 +56,12 @@ PYRAMIDS = ("binomial", "decimate")
 # neighbouring grey levels (mode-seeking). 0.2 x Silverman at every scale keeps them: on
 # brick over 6 seeds, histogram score 0.06 against 0.40 (README, Quality).
 DEFAULT_BANDWIDTH_FACTOR = 0.2
+# Gaussian fall-off of the neighbourhood terms, sigma in pixels of each scale (0: every term
+# counts alike, the thesis). On grey exemplars sigma = 3 in an 11 x 11 window lets the nearest
+# neighbours decide a voxel's level: hrtem's patch score 0.47 -> 0.26 and gravel's
+# autocorrelation 0.20 -> 0.11 (seeds 1-3); on categorical ones it moved nothing to the better
+# (fibres' autocorrelation 0.13 -> 0.32, copies up), so they keep 0 (README, Choices).
+GREY_FALLOFF = 3.0
 
 #: How a visited voxel takes its new label (thesis_spec §2.3). "icm" takes the argmax (the
 #: thesis); "gibbs" draws it from the combined, normalised LCPDF, with ICM's per-voxel
@@ -121,6 +127,7 @@ class MLParams:
     initial_temperature: float = 1.0
     bandwidth_factor: float | tuple[float, ...] | None = None
     bandwidth: tuple[float, ...] | None = field(default=None)
+    falloff: float | None = None  # None: by the exemplar (for_exemplar); 0: uniform terms (the thesis)
     relaxation: str = "gibbs"
     anneal_start: float = 1.0
     anneal_cooling: float = 0.8
@@ -170,6 +177,9 @@ class MLParams:
             object.__setattr__(self, "bandwidth_factor", self._per_scale("bandwidth_factor", self.bandwidth_factor))
         else:
             object.__setattr__(self, "bandwidth_factor", (DEFAULT_BANDWIDTH_FACTOR,) * self.scales)
+        if self.falloff is not None and not (_real(self.falloff) and self.falloff >= 0):
+            raise InputError(f"falloff={self.falloff!r} must be a number >= 0 (the sigma, in pixels, of the "
+                             "Gaussian weight of each neighbourhood term; 0 = every term alike, the thesis)")
         one_of("relaxation", self.relaxation, RELAXATIONS)
         if self.upsampling is None:  # 1/8 for ICM (thesis §5.3.3), 8/8 for annealing (TIP14)
             object.__setattr__(self, "upsampling", "8/8" if self.relaxation == "annealing" else "1/8")
@@ -208,9 +218,9 @@ class MLParams:
         return tuple(float(v) for v in values)
 
     def for_exemplar(self, n_levels: int, categorical: bool) -> "MLParams":
-        """These parameters with ``likelihood="auto"``, ``distance="auto"`` and
-        ``insert_spacing=None`` resolved for an exemplar of *n_levels* levels, *categorical* if
-        they are its own values (not a quantisation of grey ones)."""
+        """These parameters with ``likelihood="auto"``, ``distance="auto"``,
+        ``insert_spacing=None`` and ``falloff=None`` resolved for an exemplar of *n_levels*
+        levels, *categorical* if they are its own values (not a quantisation of grey ones)."""
         phases = categorical and n_levels <= AUTO_PRUNED_LEVELS
         likelihood = ("pruned" if phases else "exact") if self.likelihood == "auto" else self.likelihood
         # On two phases the weights are one constant: the plain count is the same distance.
@@ -219,7 +229,11 @@ class MLParams:
         spacing = self.insert_spacing
         if spacing is None:
             spacing = CATEGORICAL_INSERT_SPACING if phases else DEFAULT_INSERT_SPACING
-        return replace(self, likelihood=likelihood, distance=distance, insert_spacing=spacing)
+        falloff = self.falloff
+        if falloff is None:
+            falloff = 0.0 if phases else GREY_FALLOFF
+        return replace(self, likelihood=likelihood, distance=distance, insert_spacing=spacing,
+                       falloff=float(falloff))
 
     @property
     def view_names(self) -> tuple[str, ...]:

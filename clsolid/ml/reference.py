@@ -33,10 +33,13 @@ def logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
 def site_distances(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels: np.ndarray,
                    view: int) -> np.ndarray:
     """``A_p`` ``(m, n)``: each voxel's weighted squared neighbourhood distance to every site
-    (weighted mismatch count with ``model.mismatch``)."""
+    (weighted mismatch count with ``model.mismatch``): neighbour r's term weighs
+    (1 - t_r)^2, times ``model.term_weight[r]`` with a fall-off."""
     nb = wrapped_coords(voxels, model.shape, model.offsets[view])
     x = vol.ravel()[nb].astype(np.float64)
     w = 1.0 - temp.ravel()[nb].astype(np.float64)
+    if model.term_weight is not None:  # the fall-off: each term times its weight
+        w = w * np.sqrt(model.term_weight)
     if model.mismatch:
         diff = difference(x[:, :, None], model.patches[None, :, :], True, model.costs)
         return np.sum((w**2)[:, :, None] * diff, axis=1)

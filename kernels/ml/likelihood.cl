@@ -123,6 +123,16 @@ inline void add_chunk(floatv a, float cmin, float k, float *gmin, float *gsum)
 /* A neighbour's pair (xw, w) from its value x and weight wr = 1 - t: (wr x, wr) for squared
  * differences, (x, wr^2) for mismatches; ADD_TERM then adds wr^2 (x - p)^2 or wr^2 [x != p]
  * to acc, for the exemplar values p (of type T); KDIST(k, a, b) is k (a - b)^2 or k [a != b]. */
+/* The fall-off (FALLOFF defined): neighbour r's weight 1 - t times FALLOFF_ROOT[r], the square
+ * root of its Gaussian weight, so that its term weighs (1 - t)^2 times that weight. Undefined,
+ * the weight is left as it is (not multiplied by 1, which could change how terms are fused). */
+#ifdef FALLOFF
+__constant float FALLOFF_ROOT[] = {FALLOFF};
+#define TERM_WEIGHT(wr, r) ((wr) * FALLOFF_ROOT[r])
+#else
+#define TERM_WEIGHT(wr, r) (wr)
+#endif
+
 #if MISMATCH == 2
 /* weighted: exemplar values arrive as their labels' costs (COSTS, distinct); a voxel's value,
  * a label 0..L-1, is looked up, and a mismatch costs the sum of the two */
@@ -172,7 +182,7 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
         __global const int *off = offsets + (item % n_views) * NR * 3;
         for (int r = 0; r < NR; ++r) {
             int j = neighbour(voxel, Y, X, Z, off + 3 * r);
-            PAIR(vol[j], 1.0f - temp[j], xw[b][r], w[b][r])
+            PAIR(vol[j], TERM_WEIGHT(1.0f - temp[j], r), xw[b][r], w[b][r])
         }
     }
 
@@ -326,7 +336,7 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
     __global const int *off = offsets + view * NR * 3;
     for (int r = 0; r < NR; ++r) {
         int j = shifted(z, y, x, Z, Y, X, off + 3 * r);
-        PAIR(vol[j], 1.0f - temp[j], xws[r], ws[r])
+        PAIR(vol[j], TERM_WEIGHT(1.0f - temp[j], r), xws[r], ws[r])
     }
     float gmax[NGMAX], gsum[NGMAX];
     for (int g = 0; g < n_groups; ++g) {
