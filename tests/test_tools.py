@@ -147,3 +147,37 @@ def test_gallery_counts_targets_seed_by_seed(tool):
     assert "Seed by seed (1, 2):" in table
     assert "- mirror <= 0.1: 1/2 · 1/2\n" in table and "- patch <= 0.3: 2/2 · 1/2\n" in table
     assert "Seed by seed" not in gallery.markdown(rows, dict(settings, seeds=[1]), runs)
+
+
+def test_gallery_merges_runs_split_by_exemplar(tool, tmp_path, capsys):
+    """--merge: the table of two runs over different exemplars is the table of one run over
+    both; runs with other settings, or measuring an exemplar twice, are refused."""
+    import json
+
+    gallery = tool("gallery")
+
+    def run(mirror):
+        scores = {v: {key: 0.1 for key, _ in gallery.SCORES} for v in gallery.VIEWS}
+        return {"phase_error_pp": 0.5, "scores": scores, "mirror_max": mirror, "mirror_chance": 0.05,
+                "copy": {"fraction": 0.5, "view": "front", "index": 3, "inserted": False, "chance": 0.4},
+                "seconds": 1.0, "constrained": ["front", "right"], "seed": 1}
+
+    settings = {"method": "ml", "size": 64, "shape": 48, "seeds": [1], "options": {}, "device": "cpu"}
+    parts = {"a": {"porous80": [run(0.05)]}, "b": {"inclusions": [run(0.2)], "grains": [run(0.0)]}}
+    paths = []
+    for key, runs in parts.items():
+        gallery.write_report(tmp_path / key, settings, runs)
+        paths.append(str(tmp_path / key / "gallery.json"))
+    assert gallery.main(["--merge", *paths, "-o", str(tmp_path / "ab")]) == 0
+    gallery.write_report(tmp_path / "one", settings, {**parts["a"], **parts["b"]})
+    assert (tmp_path / "ab" / "gallery.md").read_text() == (tmp_path / "one" / "gallery.md").read_text()
+    merged = json.loads((tmp_path / "ab" / "gallery.json").read_text())
+    assert list(merged["runs"]) == ["porous80", "inclusions", "grains"]
+    assert "- mirror <= 0.1: 2/3\n" in (tmp_path / "ab" / "gallery.md").read_text()
+    capsys.readouterr()
+    assert gallery.main(["--merge", paths[0], paths[0], "-o", str(tmp_path / "aa")]) == 2
+    assert "porous80 measured in more than one" in capsys.readouterr().err
+    gallery.write_report(tmp_path / "c", dict(settings, seeds=[2]), {"grains": [run(0.0)]})
+    assert gallery.main(["--merge", paths[0], str(tmp_path / "c" / "gallery.json"), "-o", str(tmp_path / "ac")]) == 2
+    assert "seeds differ" in capsys.readouterr().err
+    assert not (tmp_path / "aa").exists() and not (tmp_path / "ac").exists()

@@ -14,6 +14,7 @@ are counted both on those worst cells and seed by seed.
     python tools/gallery.py -o out/gallery                        # every exemplar, 64^2 -> 48^3
     python tools/gallery.py --names porous50 hrtem --size 128 --shape 64 -o out/g128
     python tools/gallery.py --seeds 1 2 --set neighborhood=7 --set views=3 -o out/g7
+    python tools/gallery.py --merge out/a/gallery.json out/b/gallery.json -o out/ab   # runs split by exemplar
 """
 
 from __future__ import annotations
@@ -248,6 +249,43 @@ def montage_row(name: str, res: Any) -> np.ndarray:
                           constrained=params.view_names, name=name, min_side=PANEL_MIN).image
 
 
+# ----------------------------------------------------------------------------- merge
+
+
+def write_report(outdir: Path, settings: dict, runs: dict[str, list[dict]]) -> None:
+    """gallery.md and gallery.json in *outdir* from every exemplar's *runs*."""
+    rows = {name: summarise(r) for name, r in runs.items()}
+    outdir.mkdir(parents=True, exist_ok=True)
+    (outdir / "gallery.md").write_text(markdown(rows, settings, runs), encoding="utf-8")
+    (outdir / "gallery.json").write_text(
+        json.dumps(jsonable({"settings": settings, "exemplars": rows, "runs": runs}), indent=1), encoding="utf-8")
+
+
+#: Settings that two runs must share to be counted as one gallery (the device may differ).
+MERGE_KEYS = ("method", "size", "shape", "seeds", "options")
+
+
+def merge_reports(reports: list[dict]) -> tuple[dict, dict[str, list[dict]]]:
+    """One gallery from the ``gallery.json`` of several runs over different exemplars with
+    the same settings (e.g. two processes, one per core): the settings and the runs, in the
+    order given. Refuses runs whose settings differ or that share an exemplar."""
+    first = reports[0]["settings"]
+    runs: dict[str, list[dict]] = {}
+    devices = []
+    for report in reports:
+        settings = report["settings"]
+        differ = [k for k in MERGE_KEYS if settings.get(k) != first.get(k)]
+        if differ:
+            raise ValueError(f"cannot merge runs whose {', '.join(differ)} differ")
+        both = sorted(set(runs) & set(report["runs"]))
+        if both:
+            raise ValueError(f"{', '.join(both)} measured in more than one of the runs")
+        runs.update(report["runs"])
+        devices.append(settings["device"])
+    device = " + ".join(dict.fromkeys(devices))
+    return {**first, "device": device}, runs
+
+
 # ----------------------------------------------------------------------------- main
 
 
@@ -262,8 +300,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--set", dest="settings", action="append", type=parse_setting, default=[],
                     metavar="NAME=VALUE", help="a synthesize() keyword, repeatable")
     ap.add_argument("--device", default=None, help="OpenCL device (default: clsolid's choice)")
+    ap.add_argument("--merge", nargs="+", type=Path, metavar="JSON",
+                    help="instead of running: one table and gallery.json from the gallery.json of runs over "
+                         "different exemplars with the same settings (no montage: it needs the volumes)")
     ap.add_argument("-o", "--outdir", type=Path, required=True, help="folder for gallery.md/.json and montage.png")
     args = ap.parse_args(argv)
+    if args.merge:
+        try:
+            settings, runs = merge_reports([json.loads(p.read_text(encoding="utf-8")) for p in args.merge])
+        except (OSError, ValueError, KeyError) as err:
+            print(f"gallery: --merge: {err}", file=sys.stderr)
+            return 2
+        write_report(args.outdir, settings, runs)
+        print(f"wrote {args.outdir / 'gallery.md'} and gallery.json", file=sys.stderr)
+        return 0
     options = dict(args.settings)
     try:
         device = args.device if str(args.device).lower() == "reference" else clsolid.select_device(args.device)
@@ -290,12 +340,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{name} seed {seed}: {run['seconds']:.1f} s synthesis, {time.perf_counter() - t:.1f} s in all; "
                   f"phase err {_fmt(run['phase_error_pp'], 1)} pp, mirror {_fmt(run['mirror_max'])}, "
                   f"copy {c['fraction']:.2f} ({c['view']} {c['index']})", file=sys.stderr, flush=True)
-    rows = {name: summarise(r) for name, r in runs.items()}
-    args.outdir.mkdir(parents=True, exist_ok=True)
-    (args.outdir / "gallery.md").write_text(markdown(rows, settings, runs), encoding="utf-8")
-    (args.outdir / "gallery.json").write_text(
-        json.dumps(jsonable({"settings": settings, "exemplars": rows, "runs": runs}), indent=1),
-        encoding="utf-8")
+    write_report(args.outdir, settings, runs)
     montage(args.outdir / "montage.png", rows_for_montage)
     print(f"wrote {args.outdir / 'gallery.md'}, gallery.json and montage.png", file=sys.stderr)
     return 0
