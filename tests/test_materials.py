@@ -88,6 +88,9 @@ TARGETS = {  # (exemplar, target): None if met, else why not
     ("gravel", "autocorrelation"): None,
     ("composite3", "autocorrelation"): None,  # 0.26 weighted; 0.34 with plain mismatches, -0.04 squared
     ("fibres", "autocorrelation"): None,  # -0.07/-0.11 at 11x11; 0.28/0.31 at 9x9
+    ("hrtem", "histogram"): None, ("hrtem", "mirror"): None,
+    ("hrtem", "patch"): None,  # 0.15/0.14 with the fall-off (sigma 3); 0.29/0.37 without
+    ("hrtem", "autocorrelation"): None,  # 0.19/0.15
 }
 LIMITS = {"phase": ("phase_error_pp", 3.0), "mirror": ("mirror_max", 0.1), "histogram": ("histogram_kl", 0.1),
           "patch": ("patch_sw", 0.3), "autocorrelation": ("autocorrelation_l2", 0.3)}
@@ -121,6 +124,16 @@ def test_issue_10_targets_at_48(gallery_runs, name, target):
     key, limit = LIMITS[target]
     value = _value(gallery_runs(name), key)
     assert value <= limit, f"{name}: {target} {value:.2f} > {limit}"
+
+
+@pytest.mark.slow
+def test_the_fall_off_is_what_keeps_hrtem_patches(gallery_runs):
+    """hrtem's patch target (seed 1) is met with the grey exemplars' default fall-off and
+    missed without it (every term alike, the thesis): the reason for the default."""
+    with_falloff = _value(gallery_runs("hrtem"), "patch_sw")
+    without = _value(gallery_runs("hrtem", falloff=0.0), "patch_sw")
+    assert with_falloff <= 0.3 < without, (with_falloff, without)
+    assert without - with_falloff > 0.1
 
 
 # --------------------------------------------------------------------------- issue 11's kopf targets, 48^3
