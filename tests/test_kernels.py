@@ -77,8 +77,8 @@ def test_falloff_weighs_each_term_by_its_gaussian(small_labels):
         assert np.argmax(model.term_weight) in np.flatnonzero(d2 == 1) and d2[np.argmin(model.term_weight)] == 8
         # term by term, against the plain distance of one-neighbour models
         want = np.zeros((voxels.size, model.n_sites))
+        one = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, falloff=0), 0)
         for r in range(off.shape[0]):
-            one = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, falloff=0), 0)
             one.offsets = model.offsets[:, r:r + 1]
             one.patches = model.patches[r:r + 1]
             want += g[r] * site_distances(one, vol, temp, voxels, view)

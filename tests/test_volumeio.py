@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
+import shutil
+import warnings
+
 import numpy as np
 import pytest
 import tifffile
 from PIL import Image
 
-import os
-import shutil
-import warnings
-
+from clsolid.core.hostmemory import available_bytes
 from clsolid.errors import InputError, LargeTiffWarning
 from clsolid.volumeio import load_volume, save_volume
 
@@ -129,12 +129,8 @@ def test_tifffile_large_file_note_becomes_ours(tmp_path, labels, monkeypatch):
 
 
 def _room(path, need: int) -> bool:
-    free_disk = shutil.disk_usage(path).free
-    try:
-        free_ram = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):
-        return False
-    return free_disk > need * 1.2 and free_ram > need * 2.5
+    free_ram = available_bytes()
+    return free_ram is not None and shutil.disk_usage(path).free > need * 1.2 and free_ram > need * 2.5
 
 
 @pytest.mark.slow

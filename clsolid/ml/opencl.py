@@ -46,6 +46,11 @@ def group_tables(model: ScaleModel, vw: int):
     return patches, chunk_group, chunk_valid.astype(np.int32), values.astype(np.float32), chunk_site
 
 
+def _float_literals(values: np.ndarray) -> str:
+    """*values* as a comma-separated list of exact float32 hex literals, for a ``__constant`` array."""
+    return ",".join(f"{float(v).hex()}f" for v in np.asarray(values, np.float32))
+
+
 class CLBackend:
     """Runs the per-voxel work of :func:`clsolid.ml.driver.run_ml` on an OpenCL device.
 
@@ -134,9 +139,8 @@ class CLBackend:
             "NR": nr, "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
             "NS": self.params.prune_similar if self.params.likelihood == "pruned" else 1,
             "MISMATCH": 2 if model.costs is not None else int(model.mismatch),
-            **({"COSTS": ",".join(f"{c.item().hex()}f" for c in model.costs)} if model.costs is not None else {}),
-            **({"FALLOFF": ",".join(f"{float(np.float32(r)).hex()}f" for r in np.sqrt(model.term_weight))}
-               if model.term_weight is not None else {}),
+            **({"COSTS": _float_literals(model.costs)} if model.costs is not None else {}),
+            **({"FALLOFF": _float_literals(np.sqrt(model.term_weight))} if model.term_weight is not None else {}),
         })
 
     def _pad(self, n: int) -> int:
