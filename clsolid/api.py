@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+from functools import partial
 from typing import TYPE_CHECKING, Callable
 
 import numpy as np
@@ -21,8 +22,8 @@ METHODS = ("ml", "wl", "kopf", "chen-wang")
 #: What :func:`synthesize` returns: the exemplar's own values, or the engine's level indices.
 OUTPUTS = ("values", "labels")
 #: Options of the search methods (clsolid.search.params.SearchParams).
-_SEARCH_OPTIONS = ("iterations", "inner", "parent", "init", "rule", "order", "causal", "histogram", "candidates",
-                   "specify", "search", "exact_passes", "balance", "insert_spacing")
+_SEARCH_OPTIONS = ("iterations", "inner", "parent", "parent_weight", "init", "rule", "order", "causal", "histogram",
+                   "candidates", "specify", "search", "exact_passes", "balance", "insert_spacing", "distance")
 #: Options of the search methods that are not parameters of the method (what to report).
 _SEARCH_REPORTS = ("site_map",)
 #: The neighbourhood side each method uses when none is given (ML: 11, measured on the gallery; the
@@ -163,7 +164,11 @@ def synthesize(
         copies one exemplar pixel (§1.6.3): only exemplar values, and
         ``SynthesisResult.source`` says which pixel each voxel copies. Their options are ``iterations`` (passes per scale, default 10),
         ``inner`` (most searches per voxel and pass, default 4), ``parent`` (the coarser
-        scale's 3x3 in every neighbourhood, default True), ``init`` (``"upsample"``,
+        scale's 3x3 in every neighbourhood, default True), ``parent_weight`` (each of its
+        terms' weight against 1 for the square's; default 4 for ``kopf``, 1 for the others),
+        ``distance`` (``"weighted"``: the finest scale's squares compare a categorical
+        exemplar's phases as names, by weighted mismatches; ``"squared"``: by their grey
+        values; ``"auto"``, default: weighted on 3 to 8 phases for ``kopf``), ``init (``"upsample"``,
         default, or ``"noise"``) and, for ``kopf``, ``rule`` (``"centres"``, the thesis's:
         each view's matched centre; ``"overlap"``, Kopf et al.'s: every overlapping matched
         square proposes a value), ``order`` (``"sets"``, default: conflict-free sets in
@@ -452,13 +457,14 @@ def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, lev
     image, levels_of, seed = _load(exemplar, levels, rng, options)
     check_host_memory(shape, "search")
     grey = levels_of.to_values(levels_of.labels).astype(np.float64)
+    params = params.for_exemplar(np.unique(grey).size)
     if is_reference(device):
         name, make_matcher = "reference (NumPy float64)", ReferenceMatcher
     else:
         from .core.device import select_device
 
         dev = select_device(device)
-        name, make_matcher = dev.name, (lambda table: CLMatcher(dev, table))
+        name, make_matcher = dev.name, partial(CLMatcher, dev)
     log.info("synthesising %s from a %s exemplar with %s on %s, seed %d", shape, image.shape, method, name, seed)
     vol, timings, use, source = run_search(grey, shape, params, seed, make_matcher, progress, count_sites=site_map)
     if not full_output:

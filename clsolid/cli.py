@@ -69,6 +69,9 @@ def _add_synth(sub) -> None:
                         "(default %(default)s)")
     p.add_argument("--no-parent", action="store_true",
                    help="wl: match the k x k square alone, without the coarser scale's 3 x 3")
+    p.add_argument("--parent-weight", type=float, default=None,
+                   help="wl, kopf, chen-wang: each parent term's weight in the distance against 1 for the "
+                        "square's (default: 4 for kopf, 1 for the others)")
     p.add_argument("--init", choices=("upsample", "noise"), default="upsample",
                    help="wl: a finer scale starts from the coarser result up-sampled (default) or from noise")
     p.add_argument("--rule", choices=RULES, default="centres",
@@ -156,7 +159,8 @@ def _add_synth(sub) -> None:
                         "count of differing levels (mismatch: phases are names, not numbers), or that count with "
                         "a mismatch between phases a and b costing 1/(2 f_a) + 1/(2 f_b) (weighted; f: fractions); "
                         "auto (default): weighted for categorical exemplars (at most 8 values, kept; mismatch, the "
-                        "same, on two), squared for grey ones")
+                        "same, on two), squared for grey ones; the search methods take auto, squared or weighted "
+                        "(their finest scale's squares; auto: weighted on 3 to 8 phases for kopf)")
     p.add_argument("--prune-similar", type=int, default=d.prune_similar,
                    help="pruned: windows taken per source, itself included (default %(default)s)")
     p.add_argument("--prune-sample", type=int, default=d.prune_sample,
@@ -303,8 +307,8 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
             "prune_similar", "prune_sample", "prune_min_weight", "falloff", "tile", "scheduler", "workers", "indices",
             "track")
-_WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram", "candidates",
-            "specify", "search", "exact_passes", "site_map", "source_map")
+_WL_ONLY = ("iterations", "inner", "no_parent", "parent_weight", "init", "rule", "order", "causal", "histogram",
+            "candidates", "specify", "search", "exact_passes", "site_map", "source_map")
 
 
 #: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
@@ -329,7 +333,7 @@ def _check_resume_flags(args) -> None:
 def _check_method_flags(args) -> None:
     """Refuse a flag the chosen method would not read (set away from its default)."""
     # kopf balances its phases and anchors slices too; the search parameters say which method does not
-    shared = ("balance", "insert_spacing")
+    shared = ("balance", "insert_spacing", "distance")
     flags = _given(args, _WL_ONLY if args.method == "ml" else tuple(n for n in _ML_ONLY if n not in shared))
     if flags:
         raise InputError(f"{flags} not used by --method {args.method}")
@@ -392,8 +396,9 @@ def cmd_synth(args) -> int:
         raise InputError(f"--checkpoint is for --method ml; {args.method} runs are not checkpointed yet")
     if args.method != "ml":
         options = dict(iterations=args.iterations, inner=args.inner, parent=not args.no_parent,
-                       init=args.init, rule=args.rule, order=args.order, causal=args.causal,
-                       histogram=args.histogram, candidates=args.candidates, search=args.search,
+                       parent_weight=args.parent_weight, distance=args.distance, init=args.init, rule=args.rule,
+                       order=args.order, causal=args.causal, histogram=args.histogram, candidates=args.candidates,
+                       search=args.search,
                        exact_passes=args.exact_passes, specify=args.specify, builtin_size=args.builtin_size)
         for name in ("balance", "insert_spacing"):  # kopf's defaults are the flags' (ml's); the others' are off
             if args.method == "kopf" or getattr(args, name) != SYNTH_DEFAULTS[name]:

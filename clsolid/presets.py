@@ -62,7 +62,8 @@ class Preset:
 
 def _np(name: str, neighborhood: int, source: str, *extra: str, **options: Any) -> Preset:
     opts = {"neighborhood": neighborhood, "scales": 3, "iterations": 10, "views": 2, "levels": 32,
-            "specify": False, "balance": 0.0, "insert_spacing": 0.0, **options}
+            "specify": False, "balance": 0.0, "insert_spacing": 0.0, "parent_weight": 1.0, "distance": "squared",
+            **options}
     return Preset(name, "kopf", (64, 64, 64), 64, opts, source, (_NP_ORDER, _NP_K, *extra))
 
 

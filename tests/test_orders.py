@@ -63,10 +63,10 @@ def test_sequential_mode_visits_one_voxel_at_a_time_in_the_order(monkeypatch, or
     assert second == visiting_order((4, 6, 8), order, np.random.default_rng([7, 0, 2])).tolist()
 
 
-def driver_matcher(table):
+def driver_matcher(table, mismatch=0):
     from clsolid.search.match import ReferenceMatcher
 
-    return ReferenceMatcher(table)
+    return ReferenceMatcher(table, mismatch=mismatch)
 
 
 def test_sequential_order_runs_and_is_refused_with_the_overlap_rule(device):

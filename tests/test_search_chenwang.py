@@ -2,6 +2,8 @@
 against hand computations, live histograms against direct counts, the OpenCL run against
 the float64 reference, and the promise that the block holds only exemplar pixels."""
 
+from functools import partial
+
 import numpy as np
 import pytest
 
@@ -65,7 +67,7 @@ def test_histograms_are_live_counts_of_the_current_choices(device, monkeypatch):
     seen = _levels_seen(monkeypatch)
     ex = gallery_exemplar("grains", 64)[:32, :32].astype(np.float64)
     out = run_search(ex, (8, 10, 12), SearchParams(method="chen-wang", neighborhood=5, scales=2, iterations=3), 4,
-                     lambda t: CLMatcher(device, t))
+                     partial(CLMatcher, device))
     src = seen[-1].sources
     n_sites = src.index.size
     assert (src.chosen >= 0).all() and (src.source >= 0).all()
@@ -80,7 +82,7 @@ def test_opencl_run_matches_the_reference(device, name):
     ex = gallery_exemplar(name, 64)[:32, :32].astype(np.float64)
     params = SearchParams(method="chen-wang", neighborhood=5, scales=2, iterations=2, candidates=7)
     ref = run_search(ex, (10, 12, 14), params, 3, ReferenceMatcher)
-    got = run_search(ex, (10, 12, 14), params, 3, lambda t: CLMatcher(device, t))
+    got = run_search(ex, (10, 12, 14), params, 3, partial(CLMatcher, device))
     # integer grey levels at the finest level: float32 distances are exact; the coarser level's
     # blurred values could tip a near tie, so agreement is asked of nearly every voxel
     agree = np.mean(ref.volume == got.volume)

@@ -2,6 +2,8 @@
 by hand, the parity inheritance from a coarser level, the OpenCL run against the float64
 reference, and the matches it finds against the exhaustive search's."""
 
+from functools import partial
+
 import numpy as np
 import pytest
 
@@ -116,7 +118,7 @@ def test_opencl_run_matches_the_reference(device, method, scales):
     params = SearchParams(method=method, neighborhood=5, scales=scales, iterations=2, search="coherence",
                           specify=False)
     ref = run_search(ex, (10, 12, 14), params, 3, ReferenceMatcher).volume
-    got = run_search(ex, (10, 12, 14), params, 3, lambda t: CLMatcher(device, t)).volume
+    got = run_search(ex, (10, 12, 14), params, 3, partial(CLMatcher, device)).volume
     if scales == 1:
         np.testing.assert_array_equal(got, ref)
     agree = np.mean(np.isclose(ref, got, rtol=0, atol=1e-3))
@@ -131,7 +133,7 @@ def test_exact_passes_search_every_site_and_seed_the_candidates(device, method):
     without it."""
     ex = gallery_exemplar("composite3", 64)[:32, :32].astype(np.float64)
     common = dict(method=method, neighborhood=5, scales=2, iterations=3, specify=False)
-    make = lambda t: CLMatcher(device, t)
+    make = partial(CLMatcher, device)
     exact = run_search(ex, (10, 12, 14), SearchParams(**common), 3, make).volume
     every = run_search(ex, (10, 12, 14), SearchParams(search="coherence", exact_passes=3, **common), 3, make).volume
     np.testing.assert_array_equal(every, exact)
@@ -167,7 +169,7 @@ def test_coherence_matches_are_near_the_exhaustive_ones(device):
     mp = pytest.MonkeyPatch()
     mp.setitem(driver.UPDATES, "kopf", spy)
     try:
-        run_search(ex, (16, 16, 16), params, 2, lambda t: CLMatcher(device, t))
+        run_search(ex, (16, 16, 16), params, 2, partial(CLMatcher, device))
     finally:
         mp.undo()
     from clsolid.search.features import voxel_features

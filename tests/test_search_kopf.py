@@ -1,6 +1,8 @@
 """NP_K (clsolid.search.kopf): its weights, vote and histogram against hand computations,
 the OpenCL run against the float64 reference, and a categorical exemplar kept in phases."""
 
+from functools import partial
+
 import numpy as np
 import pytest
 
@@ -9,7 +11,7 @@ from clsolid.gallery import gallery_exemplar
 from clsolid.search.driver import run_search
 from clsolid.search.kopf import vote
 from clsolid.search.level import LevelHistogram
-from clsolid.search.match import CLMatcher, ReferenceMatcher
+from clsolid.search.match import CLMatcher, ReferenceMatcher, best_match_reference
 from clsolid.search.params import SearchParams
 from clsolid.search.specify import specify_histogram
 
@@ -38,7 +40,7 @@ def test_opencl_run_matches_the_reference(device, name, views):
     # the last bits of two near-equal means swaps their ranks and so their values
     params = SearchParams(method="kopf", neighborhood=5, scales=2, iterations=2, views=views, specify=False)
     ref = run_search(ex, (10, 12, 14), params, 3, ReferenceMatcher)[0]
-    got = run_search(ex, (10, 12, 14), params, 3, lambda t: CLMatcher(device, t))[0]
+    got = run_search(ex, (10, 12, 14), params, 3, partial(CLMatcher, device))[0]
     # weighted means: float32 distances move the weights in their last bits, so the values
     # agree to a thousandth of a grey level, not exactly
     agree = np.mean(np.isclose(ref, got, rtol=0, atol=1e-3))
@@ -167,6 +169,31 @@ def test_cli_passes_specify(tmp_path, device, flag, want):
     assert main(["synth", "gravel", "-o", str(out), "--method", "kopf", "--shape", "8", "8", "8", "--scales", "1",
                  "--neighborhood", "5", "--iterations", "1", "-q", *flag]) == 0
     assert json.loads((tmp_path / "k.json").read_text())["params"]["specify"] is want
+
+
+@pytest.mark.parametrize("method, flags, want", [
+    ("kopf", [], (4.0, "weighted")), ("kopf", ["--parent-weight", "2", "--distance", "squared"], (2.0, "squared")),
+    ("wl", [], (1.0, "squared")), ("chen-wang", ["--distance", "weighted"], (1.0, "weighted"))])
+def test_cli_passes_the_parent_weight_and_the_distance(tmp_path, device, method, flags, want):
+    """The sidecar records them resolved (composite3: three phases)."""
+    import json
+
+    from clsolid.cli import main
+
+    ex = tmp_path / "composite3.npy"
+    np.save(ex, gallery_exemplar("composite3", 64))
+    out = tmp_path / "k.npy"
+    assert main(["synth", str(ex), "-o", str(out), "--method", method, "--shape", "8", "8", "8", "--scales",
+                 "2", "--neighborhood", "3", "--iterations", "1", "--inner", "1", "-q", *flags]) == 0
+    params = json.loads((tmp_path / "k.json").read_text())["params"]
+    assert (params["parent_weight"], params["distance"]) == want
+
+
+def test_cli_refuses_the_parent_weight_for_ml(tmp_path, capsys):
+    from clsolid.cli import main
+
+    assert main(["synth", "brick", "-o", str(tmp_path / "m.npy"), "--parent-weight", "2", "-q"]) == 2
+    assert "--parent-weight not used by --method ml" in capsys.readouterr().err
 
 
 # --------------------------------------------------------------------------- position histogram
@@ -320,3 +347,84 @@ def test_balance_is_checked(kw):
     with pytest.raises(clsolid.InputError, match="balance"):
         SearchParams(**kw)
     assert SearchParams(method="kopf").balance == 1.0 and SearchParams(method="wl").balance == 0.0
+
+
+def test_parent_weight_defaults_and_is_checked():
+    from clsolid.search.params import KOPF_PARENT_WEIGHT
+
+    assert SearchParams(method="kopf").parent_weight == KOPF_PARENT_WEIGHT
+    assert SearchParams(method="wl").parent_weight == SearchParams(method="chen-wang").parent_weight == 1.0
+    for bad in (0, -1.0, float("inf"), True, "4"):
+        with pytest.raises(clsolid.InputError, match="parent_weight"):
+            SearchParams(method="kopf", parent_weight=bad)
+
+
+def test_the_parent_weight_scales_the_parent_terms_as_a_weight_would(device):
+    """The table's parent terms and the voxels' parent squares are scaled by sqrt(w): each
+    parent term weighs w in every distance (the matcher's weights stay 1)."""
+    from clsolid.search import driver
+    from clsolid.search.features import centre_weights, exemplar_features
+
+    ex = gallery_exemplar("gravel", 64).astype(np.float64)
+    table, _ = exemplar_features(ex[:32, :32], ex[::2, ::2][:16, :16], 5)
+    searched = driver._searched_table(table, None, 5, 4.0)
+    np.testing.assert_array_equal(searched[:, :25], table[:, :25])
+    np.testing.assert_array_equal(searched[:, 25:], 2.0 * table[:, 25:])
+    queries = table[::7] + np.random.default_rng(0).integers(-9, 10, table[::7].shape)
+    scaled = queries.copy()
+    scaled[:, 25:] *= 2.0
+    w = centre_weights(5, True, centre=False)
+    weighted = w.copy()
+    weighted[25:] = 4.0
+    by_scale = best_match_reference(scaled, searched, w)
+    by_weight = best_match_reference(queries, table, weighted)
+    np.testing.assert_array_equal(by_scale[0], by_weight[0])
+    np.testing.assert_allclose(by_scale[1], by_weight[1])
+    seen = []  # (block, parent) of every set: the coarser level's block, then the finer's with it as parent
+    inner = driver.UPDATES["kopf"]
+
+    def spy(level, vol, coarse, voxels):
+        seen.append((vol, coarse))
+        return inner(level, vol, coarse, voxels)
+
+    driver.UPDATES["kopf"] = spy
+    try:
+        clsolid.synthesize(ex, (8, 8, 8), method="kopf", scales=2, iterations=1, neighborhood=3, rng=1,
+                           device="reference", insert_spacing=0)
+    finally:
+        driver.UPDATES["kopf"] = inner
+    coarse_block = seen[0][1] is None and seen[0][0]
+    finer = [c for _, c in seen if c is not None]
+    assert coarse_block is not False and finer
+    for parent in finer:
+        np.testing.assert_array_equal(parent, 2.0 * coarse_block)
+
+
+def test_distance_resolves_per_exemplar_and_is_checked():
+    assert SearchParams(method="kopf").distance == "auto"
+    assert [SearchParams(method="kopf").for_exemplar(n).distance for n in (2, 3, 8, 9, 256)] == \
+        ["squared", "weighted", "weighted", "squared", "squared"]
+    assert SearchParams(method="kopf", distance="squared").for_exemplar(4).distance == "squared"
+    assert SearchParams(method="wl").for_exemplar(4).distance == SearchParams(method="chen-wang").for_exemplar(
+        4).distance == "squared"
+    assert SearchParams(method="wl", distance="weighted").for_exemplar(4).distance == "weighted"
+    with pytest.raises(clsolid.InputError, match="distance"):
+        SearchParams(method="kopf", distance="mismatch")
+
+
+def test_phase_codes_make_kopf_blind_to_the_phases_grey_values(device):
+    """With weighted mismatches the finest level's matches do not depend on which grey value
+    names which phase: renaming composite4's phases changes the result far less than it does
+    with squared differences (the coarser levels still blend grey values)."""
+    ex = gallery_exemplar("composite4", 64)
+    values = np.unique(ex)
+    renamed = values[[0, 3, 1, 2]][np.searchsorted(values, ex)]  # a permutation of the names
+    back = {float(a): float(b) for a, b in zip(values[[0, 3, 1, 2]], values)}
+    changed = {}
+    for distance in ("weighted", "squared"):
+        a = clsolid.synthesize(ex, (16, 16, 16), method="kopf", scales=1, iterations=3, rng=2, distance=distance,
+                               device=device)
+        b = clsolid.synthesize(renamed, (16, 16, 16), method="kopf", scales=1, iterations=3, rng=2,
+                               distance=distance, device=device)
+        changed[distance] = np.mean(a != np.vectorize(back.get)(b))
+    assert changed["weighted"] == 0.0 and changed["squared"] > 0.2, changed

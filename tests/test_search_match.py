@@ -168,3 +168,67 @@ def test_a_table_beyond_the_device_is_refused_before_allocating(device):
 
     with pytest.raises(DeviceMemoryError, match="match table"):
         CLMatcher(Small(), np.zeros((100, 25), np.float32))
+
+
+def _coded(seed, shape=(30, 26), phases=(0, 85, 170, 255), fractions=(0.55, 0.25, 0.15, 0.05)):
+    """A 4-phase exemplar (grey values) and its phase codes."""
+    from clsolid.search.codes import phase_codes
+
+    ex = np.random.default_rng(seed).choice(np.array(phases, np.float64), shape, p=fractions)
+    return ex, phase_codes(ex)
+
+
+def test_reference_mismatch_terms_cost_the_sum_of_the_two_codes():
+    q = np.array([[3.0, 5.0, 2.0]])
+    table = np.array([[3, 7, 0], [4, 5, 2]], np.float32)
+    _, dist = k_nearest_reference(q, table, 2, mismatch=2)  # terms 0, 1: codes; term 2: squared
+    assert dist.tolist() == [[7.0, 16.0]]  # site 1: 3 != 4 costs 7; site 0: 5 != 7 costs 12, (2 - 0)^2 = 4
+
+
+@pytest.mark.parametrize("k, parent, causal", [(3, False, False), (5, True, False), (7, True, True)])
+def test_kernels_match_the_reference_on_phase_codes(device, k, parent, causal):
+    """Codes in the square's terms, grey levels in a parent's: the best match, the K nearest
+    and the candidate distances, exactly (integer codes, sums below 2^24)."""
+    from clsolid.search.features import centre_weights
+
+    ex, codes = _coded(k)
+    table, _ = exemplar_table(ex, k)
+    if parent:  # nine grey terms after the square's, as a multi-resolution neighbourhood has
+        table = np.concatenate([table, np.random.default_rng(1).integers(0, 256, (table.shape[0], 9))], axis=1)
+    searched = codes.encode_terms(table, k * k).astype(np.float32)
+    rng = np.random.default_rng(k)
+    queries = searched[rng.integers(0, table.shape[0], 300)].copy()
+    flip = rng.random((300, k * k)) < 0.2  # a fifth of the square's terms another phase
+    queries[:, : k * k][flip] = rng.choice(codes.codes, flip.sum())
+    weights = centre_weights(k, parent, centre=False, causal=causal)
+    matcher = CLMatcher(device, searched, max_batch=128, mismatch=k * k)
+    for count in (1, 5):
+        want_i, want_d = k_nearest_reference(queries, searched, count, weights, mismatch=k * k)
+        got_i, got_d = matcher.nearest(queries, count, weights)
+        np.testing.assert_array_equal(got_i, want_i)
+        np.testing.assert_array_equal(got_d, want_d.astype(np.float32))
+    cand = rng.integers(-1, table.shape[0], (300, 12))
+    want = candidate_distances_reference(queries, searched, cand, weights, mismatch=k * k)
+    np.testing.assert_array_equal(matcher.distances(queries, cand, weights), want.astype(np.float32))
+
+
+def test_phase_codes_weigh_rare_phases_and_ignore_the_grey_values():
+    from clsolid.search.codes import phase_codes
+
+    ex, codes = _coded(0)
+    f = np.array([np.mean(ex == p) for p in codes.phases])
+    assert np.all(np.diff(codes.codes[np.argsort(f)]) < 0)  # the rarer the phase, the dearer its mismatch
+    np.testing.assert_allclose(codes.codes * f, codes.codes[0] * f[0], rtol=0.01)  # c_p = S / (2 f_p)
+    mean = sum(f[a] * f[b] * (codes.codes[a] + codes.codes[b]) for a in range(4) for b in range(4) if a != b)
+    assert mean == pytest.approx(2 * ex.var(), rel=0.01)  # two random pixels: as far as by squared differences
+    renamed = phase_codes(np.choose(np.searchsorted(codes.phases, ex), [0.0, 255.0, 85.0, 170.0]))
+    # renamed phases keep their codes up to the scale (the variance changes with the names)
+    np.testing.assert_allclose(np.sort(renamed.codes) / renamed.codes.max(), np.sort(codes.codes) / codes.codes.max(),
+                               rtol=0.01)
+    np.testing.assert_array_equal(codes.encode(np.array([[0.0, 90.0], [250.0, 170.0]])),
+                                  codes.codes[[[0, 1], [3, 2]]])  # blends count for their nearest phase
+
+
+def test_a_bad_mismatch_count_is_refused():
+    with pytest.raises(InputError, match="mismatch=10"):
+        k_nearest_reference(np.zeros((2, 9)), np.zeros((4, 9)), 1, mismatch=10)

@@ -2,6 +2,8 @@
 against the float64 reference, determinism by seed, the inner repetition, and a statistic
 that the published method must improve on its noise start."""
 
+from functools import partial
+
 import numpy as np
 import pytest
 
@@ -75,7 +77,7 @@ def test_opencl_run_matches_the_reference(device, views, k, parent):
     ex = _exemplar(24)
     params = SearchParams(neighborhood=k, scales=2, iterations=2, views=views, parent=parent)
     ref, ref_t = run_wl(ex, (10, 12, 14), params, 3, ReferenceMatcher)[:2]
-    got, got_t = run_wl(ex, (10, 12, 14), params, 3, lambda t: CLMatcher(device, t))[:2]
+    got, got_t = run_wl(ex, (10, 12, 14), params, 3, partial(CLMatcher, device))[:2]
     agree = np.mean(np.isclose(ref, got, rtol=0, atol=1e-9))
     assert agree >= 0.99, f"only {agree:.2%} of voxels agree with the float64 reference"
     if views == 2:  # halves of integers: every distance exact in float32, so the runs are equal
@@ -86,7 +88,7 @@ def test_opencl_run_matches_the_reference(device, views, k, parent):
 def test_same_seed_same_volume(device):
     ex = _exemplar(24)
     params = SearchParams(neighborhood=3, scales=2, iterations=2)
-    run = lambda seed: run_wl(ex, (8, 8, 8), params, seed, lambda t: CLMatcher(device, t))[0]  # noqa: E731
+    run = lambda seed: run_wl(ex, (8, 8, 8), params, seed, partial(CLMatcher, device))[0]  # noqa: E731
     a = run(5)
     np.testing.assert_array_equal(a, run(5))
     assert np.mean(a != run(6)) > 0.5
@@ -107,7 +109,7 @@ def test_wl_grows_structure_from_noise(device):
     ex = (gallery_exemplar("porous80", 64) > 0).astype(np.float64)
 
     def grow(init):
-        return run_wl(ex, (16, 16, 16), SearchParams(iterations=3, init=init), 1, lambda t: CLMatcher(device, t))[0]
+        return run_wl(ex, (16, 16, 16), SearchParams(iterations=3, init=init), 1, partial(CLMatcher, device))[0]
 
     def jumps(img):  # fraction of horizontal neighbours on different phases
         return np.mean(np.abs(np.diff(img, axis=-1)) > 0.5)

@@ -45,7 +45,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .features import voxel_features
 from .kopf import robust_norm, robust_weights
 from .level import Level
 
@@ -117,14 +116,14 @@ def solve(values: np.ndarray, weights: np.ndarray) -> np.ndarray:
 def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray) -> int:
     """One conflict-free set: search, choose among candidates, weigh, solve. Returns the
     searches made."""
-    src, k = level.sources, level.params.neighborhood
+    src = level.sources
     n_views = len(level.params.view_names)
     chosen = np.empty((n_views, voxels.size), np.int64)
     dist = np.empty((n_views, voxels.size))
     for i, view in enumerate(level.params.view_names):
         for lo in range(0, voxels.size, CHUNK):  # a view's choices all see the same index histogram
             part = slice(lo, lo + CHUNK)
-            queries = voxel_features(vol, coarse, voxels[part], view, k)
+            queries = level.queries(i, voxels[part], vol, coarse)
             best = level.best(i, voxels[part], vol, coarse, level.w_first, queries)[0]
             chosen[i, part], dist[i, part] = choose(level, queries, best)
         _recount(src.index, src.chosen[i, voxels], chosen[i])  # the next view sees this one's choices

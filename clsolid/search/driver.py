@@ -25,6 +25,7 @@ from ..errors import InputError
 from . import chenwang, coherence, kopf, wl
 from .features import centre_weights, exemplar_features, site_use, valid_sites
 from .level import Level, LevelHistogram
+from .codes import phase_codes
 from .match import candidate_sets
 from .params import SearchParams
 from .pyramid import gaussian_pyramid
@@ -70,13 +71,16 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
                count_sites: bool = False) -> SearchOutput:
     """Grow a ``shape`` block from a 2D *exemplar* (float grey levels) with ``params.method``.
 
-    *make_matcher(table)* returns an object with ``best(queries, weights)`` (a
-    :class:`~clsolid.search.match.CLMatcher` or :class:`~clsolid.search.match.ReferenceMatcher`).
+    *make_matcher(table, mismatch=n)* returns an object with ``best(queries, weights)`` (a
+    :class:`~clsolid.search.match.CLMatcher` or :class:`~clsolid.search.match.ReferenceMatcher`;
+    n the leading terms of a row that are phase codes). ``params.distance="auto"`` is
+    resolved for the exemplar (:meth:`~clsolid.search.params.SearchParams.for_exemplar`).
     *progress* gets a :class:`~clsolid.core.synthesis.SweepInfo` after every pass (no
     temperatures: those fields are NaN). Returns a :class:`SearchOutput`; with *count_sites*
     its position histogram counts, for ``chen-wang``, each voxel's source, and for the others
     every voxel matched once more in every view.
     """
+    params = params.for_exemplar(np.unique(exemplar).size)
     k = params.neighborhood
     shapes = level_shapes(shape, params.scales)
     if min(shapes[-1]) < 2:
@@ -93,13 +97,17 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
         parent_shape = None if parent_img is None else parent_img.shape
         vol = _start(pyr[level], shapes[level], coarse, params.init, seed, level)
         anchors = _anchor(params, vol, pyr[level], level, seed, shape)
-        ctx = _level(params, pyr, level, parent_shape, table, centres, vol, make_matcher(table), coh)
+        codes = phase_codes(pyr[0]) if params.distance == "weighted" and level == 0 else None
+        searched = _searched_table(table, codes, k, params.parent_weight)
+        matcher = make_matcher(searched, mismatch=0 if codes is None else k * k)
+        ctx = _level(params, pyr, level, parent_shape, table, searched, centres, vol, matcher, coh)
+        ctx.codes = codes
         coh = ctx.coherence
         update = UPDATES[params.method]
         n_sets = set_count(shapes[level], k // 2)
         searches = 0
         t_iter = time.perf_counter()
-        parent = coarse if use_parent else None
+        parent = coarse * math.sqrt(params.parent_weight) if use_parent else None  # as the table's parents
         for it in range(1, params.iterations + 1):
             ctx.exhaustive = it <= params.exact_passes
             if params.method == "kopf" and params.rule == "overlap":
@@ -133,11 +141,12 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
 
 
 def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape: tuple[int, int] | None,
-           table: np.ndarray, centres: np.ndarray, vol: np.ndarray, matcher: Any,
+           table: np.ndarray, searched: np.ndarray, centres: np.ndarray, vol: np.ndarray, matcher: Any,
            coarser: coherence.Coherence | None) -> Level:
     """One level's :class:`Level`: weights, and what the method and search keep: kopf's
     grey-level histogram, chen-wang's candidate sets and histograms, the coherence state
-    (started from the *coarser* level's)."""
+    (started from the *coarser* level's). *table* holds the sites' grey values, *searched*
+    the rows the matcher compares (with phase codes, :mod:`clsolid.search.codes`)."""
     k, use_parent = params.neighborhood, parent_shape is not None
     ctx = Level(params=params, matcher=matcher, centres=centres,
                 patches=table[:, : k * k].astype(np.float64), values=np.unique(pyr[level]),
@@ -149,7 +158,7 @@ def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape
     n_cw = params.candidates if params.method == "chen-wang" else 0
     n_coh = coherence.SIMILAR if params.search == "coherence" else 0
     if n_cw or n_coh:  # one search serves both: a smaller set is a larger one's first columns
-        sets = candidate_sets(matcher, table, max(n_cw, n_coh), ctx.w_again)
+        sets = candidate_sets(matcher, searched, max(n_cw, n_coh), ctx.w_again)
     if n_cw:
         ctx.sources = chenwang.Sources.start(sets[:, :n_cw], vol.size, len(params.view_names))
     if n_coh:
@@ -159,6 +168,19 @@ def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape
         if coarser is not None:
             ctx.coherence.inherit(coarser)
     return ctx
+
+
+def _searched_table(table: np.ndarray, codes: Any, k: int, parent_weight: float) -> np.ndarray:
+    """The rows the matcher compares: the sites' features with the square's phases as
+    *codes* (:mod:`clsolid.search.codes`; None: grey values) and the parent's terms scaled
+    by sqrt(*parent_weight*), as the voxels' parent squares are, so that each weighs
+    *parent_weight* in the distance while the kernels keep unit weights (a weight other
+    than 1 would cost a multiply a term: 40 % of the exhaustive search's time here)."""
+    out = table if codes is None else codes.encode_terms(table, k * k)
+    if parent_weight != 1.0 and table.shape[1] > k * k:
+        out = np.array(out, np.float64)
+        out[:, k * k :] *= math.sqrt(parent_weight)
+    return out
 
 
 def _anchor(params: SearchParams, vol: np.ndarray, exemplar: np.ndarray, level: int, seed: int,

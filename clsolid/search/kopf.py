@@ -31,6 +31,7 @@ from ..core.views import VIEW_AXES
 from ..ml.balance import project_bias, sweep_target
 from .level import Level
 from .match import square_offsets
+from .params import MAX_PHASES
 from .wl import matches
 
 #: The robust norm's exponent ("as indicated by [Kwa05]").
@@ -39,8 +40,6 @@ R = 0.8
 EPS_REL = 1e-3
 #: Scale of the log supports in the balanced vote's fit (:func:`vote_balanced`).
 SHARPNESS = 16.0
-#: An exemplar with at most this many values is categorical: its voxels take a phase, never a blend.
-MAX_PHASES = 8
 
 
 def robust_norm(ssd: np.ndarray, span: float) -> np.ndarray:

@@ -74,7 +74,9 @@ class Level:
     repeated ones by ``w_again``; ``span`` is the finest exemplar's range (1 if constant),
     the scale of Kopf's ``eps``; ``histogram`` for ``kopf``, ``sources``
     (:class:`~clsolid.search.chenwang.Sources`) for ``chen-wang``, ``coherence``
-    (:class:`~clsolid.search.coherence.Coherence`) for the accelerated search."""
+    (:class:`~clsolid.search.coherence.Coherence`) for the accelerated search; ``codes``
+    (:class:`~clsolid.search.codes.PhaseCodes`) where the squares compare phase codes
+    (the matcher's table holds them; ``patches`` and ``centres`` stay grey values)."""
 
     params: SearchParams
     matcher: Any
@@ -88,19 +90,31 @@ class Level:
     sources: Any = None
     coherence: Any = None
     exhaustive: bool = False  # this pass searches every site even under the coherence search
+    codes: Any = None
+
+    def searched(self, vol: np.ndarray) -> np.ndarray:
+        """The block as the matcher compares it: *vol*, or with ``codes`` its phases' codes."""
+        return vol if self.codes is None else self.codes.encode(vol)
+
+    def queries(self, view: int, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None) -> np.ndarray:
+        """The neighbourhoods of *voxels* of the block *vol* in the *view*-th constrained view,
+        as the matcher compares them (the square's terms encoded with ``codes``)."""
+        k = self.params.neighborhood
+        q = voxel_features(vol, coarse, voxels, self.params.view_names[view], k)
+        return q if self.codes is None else self.codes.encode_terms(q, k * k)
 
     def best(self, view: int, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None,
              weights: np.ndarray, queries: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The best match of *voxels* of the block *vol* (*coarse*: the parent level's) in the
         *view*-th constrained view: exhaustive, or among k-coherence candidates
         (``search="coherence"``, :meth:`~clsolid.search.coherence.Coherence.search`).
-        *queries*, their neighbourhoods, are gathered here unless given. Returns
+        *queries*, their neighbourhoods (:meth:`queries`), are gathered here unless given. Returns
         ``(site (m,), distance (m,))``."""
         k = self.params.neighborhood
         if self.coherence is not None and not self.exhaustive:
-            return self.coherence.search(self.matcher, view, voxels, vol, coarse, k, weights, queries)
+            return self.coherence.search(self.matcher, view, voxels, self.searched(vol), coarse, k, weights, queries)
         if queries is None:
-            queries = voxel_features(vol, coarse, voxels, self.params.view_names[view], k)
+            queries = self.queries(view, voxels, vol, coarse)
         site, least = self.matcher.best(queries, weights)
         if self.coherence is not None:  # an exact pass seeds the candidates of the passes after
             self.coherence.record(view, voxels, site)

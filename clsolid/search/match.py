@@ -6,7 +6,9 @@ its own list of candidate sites (``chen-wang``'s candidate sets).
 A neighbourhood is the k x k square centred on a pixel, read row by row (offsets from
 :func:`square_offsets`); the distance is the weighted sum of squared differences, with
 weight 1 everywhere (full square) or 0 on the centre and the terms after it
-(:func:`causal_weights`, the L-shaped causal neighbourhood). Only exemplar sites whose
+(:func:`causal_weights`, the L-shaped causal neighbourhood). With ``mismatch = n`` the
+first n terms of a row are phase codes (:mod:`clsolid.search.codes`) and each adds the
+weighted mismatch instead: 0 where the two codes are equal, else their sum. Only exemplar sites whose
 whole square lies inside the exemplar are candidates (thesis_spec §1: no wrap-around in
 the exemplar). The best match is the candidate of least distance, the lowest site index
 on a tie, on the device as in the reference: for integer grey levels every partial sum is
@@ -93,10 +95,29 @@ def _weights(weights: np.ndarray | None, dim: int) -> np.ndarray:
     return w
 
 
+def check_mismatch(mismatch: Any, dim: int) -> int:
+    """Validate the number of leading terms compared as phase codes: an integer in [0, dim]."""
+    if isinstance(mismatch, bool) or not isinstance(mismatch, (int, np.integer)) or not 0 <= mismatch <= dim:
+        raise InputError(f"mismatch={mismatch!r} must be an integer in [0, {dim}] (the leading terms of a "
+                         "neighbourhood compared as phase codes)")
+    return int(mismatch)
+
+
+def term_distances(q: np.ndarray, t: np.ndarray, mismatch: int = 0) -> np.ndarray:
+    """Float64, broadcast like ``q - t``: each term's squared difference, or on the first
+    *mismatch* terms (the last axis) the weighted mismatch of codes, ``[q != t] (q + t)``."""
+    d = (q - t) ** 2
+    if mismatch:
+        a, b = q[..., :mismatch], t[..., :mismatch]
+        d[..., :mismatch] = np.where(a != b, a + b, 0.0)
+    return d
+
+
 def k_nearest_reference(queries: np.ndarray, table: np.ndarray, count: int,
-                        weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Float64 brute force: for each query the *count* sites of least weighted SSD, nearest
-    first, the lower index first among equal distances.
+                        weights: np.ndarray | None = None, mismatch: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Float64 brute force: for each query the *count* sites of least weighted distance
+    (squared differences; weighted mismatches on the first *mismatch* terms), nearest first,
+    the lower index first among equal distances.
 
     Returns ``(site indices (m, count) int64, distances (m, count) float64)``.
     """
@@ -104,10 +125,11 @@ def k_nearest_reference(queries: np.ndarray, table: np.ndarray, count: int,
     q = _check_queries(queries, t.shape[1]).astype(np.float64)
     w = _weights(weights, t.shape[1]).astype(np.float64)
     count = _check_count(count, t.shape[0])
+    mismatch = check_mismatch(mismatch, t.shape[1])
     idx = np.empty((q.shape[0], count), np.int64)
     dist = np.empty((q.shape[0], count))
     for i in range(0, q.shape[0], 256):  # bounded memory: 256 x n_sites distances at a time
-        d = (((q[i : i + 256, None, :] - t[None, :, :]) ** 2) * w).sum(axis=2)
+        d = (term_distances(q[i : i + 256, None, :], t[None, :, :], mismatch) * w).sum(axis=2)
         if count == 1:  # argmin: the first minimum, the lowest index (and far cheaper than a sort)
             order = np.argmin(d, axis=1)[:, None]
         else:
@@ -117,19 +139,21 @@ def k_nearest_reference(queries: np.ndarray, table: np.ndarray, count: int,
     return idx, dist
 
 
-def best_match_reference(queries: np.ndarray, table: np.ndarray,
-                         weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Float64 brute force: for each query the lowest-index site of least weighted SSD.
+def best_match_reference(queries: np.ndarray, table: np.ndarray, weights: np.ndarray | None = None,
+                         mismatch: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Float64 brute force: for each query the lowest-index site of least weighted distance
+    (as :func:`k_nearest_reference`).
 
     Returns ``(site index (m,) int64, distance (m,) float64)``.
     """
-    idx, dist = k_nearest_reference(queries, table, 1, weights)
+    idx, dist = k_nearest_reference(queries, table, 1, weights, mismatch)
     return idx[:, 0], dist[:, 0]
 
 
 def candidate_distances_reference(queries: np.ndarray, table: np.ndarray, candidates: np.ndarray,
-                                  weights: np.ndarray | None = None) -> np.ndarray:
-    """Float64: the weighted SSD between each query and each of its candidate sites.
+                                  weights: np.ndarray | None = None, mismatch: int = 0) -> np.ndarray:
+    """Float64: the weighted distance (as :func:`k_nearest_reference`) between each query and
+    each of its candidate sites.
 
     *candidates* is ``(m, C)`` site indices (a negative one: no candidate, distance +inf).
     Returns ``(m, C)`` float64.
@@ -138,7 +162,8 @@ def candidate_distances_reference(queries: np.ndarray, table: np.ndarray, candid
     q = _check_queries(queries, t.shape[1]).astype(np.float64)
     w = _weights(weights, t.shape[1]).astype(np.float64)
     cand = _check_candidates(candidates, q.shape[0], t.shape[0])
-    d = (((q[:, None, :] - t[np.maximum(cand, 0)]) ** 2) * w).sum(axis=2)
+    mismatch = check_mismatch(mismatch, t.shape[1])
+    d = (term_distances(q[:, None, :], t[np.maximum(cand, 0)], mismatch) * w).sum(axis=2)
     return np.where(cand < 0, np.inf, d)
 
 
@@ -186,14 +211,17 @@ class _Layout:
     """A table on the device for one set of weights: only the terms of nonzero weight (a
     term of weight 0 adds exactly 0 to every distance), transposed for the exhaustive
     search (sites along the vectors, padded with :data:`PAD`) and row by row for
-    candidates; ``unit`` when every weight kept is 1, so the kernels leave the multiply out."""
+    candidates; ``unit`` when every weight kept is 1, so the kernels leave the multiply out;
+    ``nmis`` the kept terms that are codes (the first *mismatch* of a row)."""
 
-    def __init__(self, device: Device, table: np.ndarray, weights: np.ndarray, n_pad: int, vw: int) -> None:
+    def __init__(self, device: Device, table: np.ndarray, weights: np.ndarray, n_pad: int, vw: int,
+                 mismatch: int = 0) -> None:
         import pyopencl as cl
 
         keep = np.flatnonzero(weights > 0)
         self.keep = keep if keep.size else np.array([0])  # all zero: one term of weight 0
         self.unit = bool(np.all(weights[self.keep] == 1.0))
+        self.nmis = int(np.count_nonzero(self.keep < mismatch))  # keep is sorted: the codes come first
         dim, width = self.keep.size, -(-self.keep.size // vw) * vw
         table_t = np.full((dim, n_pad), PAD, np.float32)  # sites along the vectors
         table_t[:, : table.shape[0]] = table[:, self.keep].T
@@ -221,16 +249,20 @@ class CLMatcher:
         Per-term weights of the distance (default: all 1).
     max_batch : int
         Queries per launch.
+    mismatch : int
+        The leading terms of a row that are phase codes, compared by weighted mismatch
+        (:mod:`clsolid.search.codes`); 0 (default): every term by squared difference.
     """
 
     def __init__(self, device: Device, table: np.ndarray, weights: np.ndarray | None = None,
-                 max_batch: int = 65536) -> None:
+                 max_batch: int = 65536, mismatch: int = 0) -> None:
         import pyopencl as cl
 
         self.table = np.ascontiguousarray(table, np.float32)
         if self.table.ndim != 2 or self.table.shape[0] == 0:
             raise InputError(f"the table must be a non-empty (n_sites, dim) array; got shape {self.table.shape}")
         self.device, self.dim, self.max_batch = device, self.table.shape[1], int(max_batch)
+        self.mismatch = check_mismatch(mismatch, self.dim)
         for name, nbytes in (("match table", self.table.nbytes + 16 * self.dim * 4),  # each of two copies
                              ("match queries", self.max_batch * self.dim * 4),
                              ("match results", self.max_batch * MAX_K * 4)):
@@ -249,13 +281,13 @@ class CLMatcher:
         """The device tables for *weights* (built once per distinct weights; a run uses two)."""
         key = weights.tobytes()
         if key not in self._layouts:
-            self._layouts[key] = _Layout(self.device, self.table, weights, self.n_pad, self._vw)
+            self._layouts[key] = _Layout(self.device, self.table, weights, self.n_pad, self._vw, self.mismatch)
         return self._layouts[key]
 
     def kernel(self, name: str, count: int = 1, **defines: int):
         """Kernel *name* of ``search/match.cl`` built for the current weights (and *defines*)."""
         lay = self._layout
-        defines.update(QDIM=self.dim, DIM=lay.keep.size, VW=self._vw, K=count, UNIT=int(lay.unit),
+        defines.update(QDIM=self.dim, DIM=lay.keep.size, VW=self._vw, K=count, UNIT=int(lay.unit), NMIS=lay.nmis,
                        QB=_queries_per_item(self.device, count))
         return programs.build(self.device, "search/match.cl", defines)[name]
 
@@ -332,9 +364,10 @@ class CLMatcher:
 class ReferenceMatcher:
     """:class:`CLMatcher`'s interface on the float64 references (for tests)."""
 
-    def __init__(self, table: np.ndarray, weights: np.ndarray | None = None) -> None:
+    def __init__(self, table: np.ndarray, weights: np.ndarray | None = None, mismatch: int = 0) -> None:
         self.table = np.asarray(table, np.float32)
         self.weights = _weights(weights, self.table.shape[1])
+        self.mismatch = check_mismatch(mismatch, self.table.shape[1])
 
     def _set_weights(self, weights: np.ndarray | None) -> None:
         if weights is not None:
@@ -343,13 +376,13 @@ class ReferenceMatcher:
     def nearest(self, queries: np.ndarray, count: int,
                 weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         self._set_weights(weights)
-        return k_nearest_reference(queries, self.table, count, self.weights)
+        return k_nearest_reference(queries, self.table, count, self.weights, self.mismatch)
 
     def best(self, queries: np.ndarray, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         self._set_weights(weights)
-        return best_match_reference(queries, self.table, self.weights)
+        return best_match_reference(queries, self.table, self.weights, self.mismatch)
 
     def distances(self, queries: np.ndarray, candidates: np.ndarray,
                   weights: np.ndarray | None = None) -> np.ndarray:
         self._set_weights(weights)
-        return candidate_distances_reference(queries, self.table, candidates, self.weights)
+        return candidate_distances_reference(queries, self.table, candidates, self.weights, self.mismatch)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 from ..core.checks import int_in, one_of
 from ..core.orders import ORDERS
@@ -27,6 +27,17 @@ HISTOGRAMS = ("global", "slice")
 #: How each voxel's best match is found: the exhaustive search (the reference) or among
 #: k-coherence candidates (clsolid.search.coherence).
 SEARCHES = ("exact", "coherence")
+#: How the matched squares compare a categorical exemplar's phases (clsolid.search.codes):
+#: "squared" grey-level differences (the thesis), "weighted" mismatches of phase codes; "auto":
+#: for kopf weighted on exemplars of 3 to MAX_PHASES values (on two phases the two agree), else
+#: squared (measured worse for chen-wang, mixed for wl: README, Choices).
+DISTANCES = ("auto", "squared", "weighted")
+#: An exemplar with at most this many values is categorical: its voxels take a phase, never a blend.
+MAX_PHASES = 8
+#: kopf's weight of each parent term (the 9 of the coarser level's 3 x 3 square) against the
+#: k x k square's 1: measured on the gallery (README, Choices), it keeps the coarse structure that
+#: the finest level's matches otherwise drift from.
+KOPF_PARENT_WEIGHT = 4.0
 #: chen-wang's candidate set size (thesis §5.2.1, §6.3.3).
 DEFAULT_CANDIDATES = 15
 #: kopf's anchor slices: one about every 6 voxels of each constrained view's depth, as the
@@ -64,6 +75,11 @@ class SearchParams:
     parent : bool
         Multi-resolution neighbourhood: the k x k square plus the 3 x 3 square of the
         coarser level (Wei & Levoy; thesis_spec §1.3). Ignored at the coarsest level.
+    parent_weight : float or None
+        The weight of each of the parent square's 9 terms in the distance, against 1 for
+        each of the k x k square's (the sources are silent; a departure, README, Choices).
+        None (default): :data:`KOPF_PARENT_WEIGHT` for ``kopf``, whose gallery scores it
+        lifts, 1 for the others (unmeasured there).
     init : {"upsample", "noise"}
         How a finer level starts: the coarser result, each voxel copied to its 2x2x2 block
         (default), or noise drawn from that level's exemplar pixels (Wei & Levoy's reading;
@@ -124,6 +140,15 @@ class SearchParams:
         so that the coarse levels cannot settle into a block that is its own x<->z mirror
         image; the finest level starts those voxels from noise. 0: none (the thesis). None
         (default): 6 for ``kopf``, 0 for the others.
+    distance : {"auto", "squared", "weighted"}
+        How the finest level's squares compare the phases of a categorical exemplar:
+        squared differences of their grey values (the thesis), or ``"weighted"``
+        mismatches, phase a against phase b costing ``1/(2 f_a) + 1/(2 f_b)`` (f: the
+        phases' fractions; the likelihood method's weighted distance, ``clsolid.search.codes``),
+        so that which phase has which grey value does not matter. ``"auto"`` (default):
+        for ``kopf`` weighted on exemplars of 3 to :data:`MAX_PHASES` values, squared
+        otherwise (on two phases the two are the same) and for the other methods (where
+        the gallery measured it worse or mixed); resolved by :meth:`for_exemplar`.
     """
 
     method: str = "wl"
@@ -133,6 +158,7 @@ class SearchParams:
     views: int = 2
     inner: int = 4
     parent: bool = True
+    parent_weight: float | None = None
     init: str = "upsample"
     rule: str = "centres"
     order: str = "sets"
@@ -144,6 +170,7 @@ class SearchParams:
     specify: bool | None = None
     balance: float | None = None
     insert_spacing: float | None = None
+    distance: str = "auto"
 
     #: The anchor slices' layout, count and make (read by :mod:`clsolid.core.slices`): always
     #: staggered, their number set by ``insert_spacing``, each slice one exemplar window.
@@ -207,6 +234,21 @@ class SearchParams:
         object.__setattr__(self, "insert_spacing", float(self.insert_spacing))
         if not isinstance(self.parent, bool):
             raise InputError(f"parent={self.parent!r} must be True or False")
+        if self.parent_weight is None:
+            object.__setattr__(self, "parent_weight", KOPF_PARENT_WEIGHT if self.method == "kopf" else 1.0)
+        if (isinstance(self.parent_weight, bool) or not isinstance(self.parent_weight, (int, float))
+                or not 0 < self.parent_weight < float("inf")):
+            raise InputError(f"parent_weight={self.parent_weight!r} must be a positive number (each parent term's "
+                             "weight against 1 for the square's)")
+        object.__setattr__(self, "parent_weight", float(self.parent_weight))
+        one_of("distance", self.distance, DISTANCES)
+
+    def for_exemplar(self, n_values: int) -> "SearchParams":
+        """These parameters with ``distance="auto"`` resolved for an exemplar of *n_values* grey values."""
+        if self.distance != "auto":
+            return self
+        phases = self.method == "kopf" and 3 <= n_values <= MAX_PHASES
+        return replace(self, distance="weighted" if phases else "squared")
 
     @property
     def view_names(self) -> tuple[str, ...]:

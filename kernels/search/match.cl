@@ -8,6 +8,9 @@
  *   K    sites kept per query by k_nearest (1 for the best match)
  *   QB   queries per work-item of k_nearest
  *   UNIT 1 if every weight is 1 (the multiply is left out), else 0
+ *   NMIS the first NMIS kept terms are phase codes, compared by weighted mismatch: 0 where
+ *        the codes are equal, else their sum (clsolid.search.codes); the rest by squared
+ *        difference. 0: every term squared (grey levels)
  *
  * queries: (n_queries, QDIM) float, row-major.
  * table_t: (DIM, n_pad) float, the sites transposed, n_pad a multiple of VW; padding
@@ -26,9 +29,13 @@ typedef CAT(float, VW) floatv;
  * their products are exactly 0), or read per term. */
 #if UNIT
 #define TERM(e, wd, acc) fma((e), (e), (acc))
+#define ADD(m, wd, acc) ((acc) + (m))
 #else
 #define TERM(e, wd, acc) fma((wd) * (e), (e), (acc))
+#define ADD(m, wd, acc) fma((wd), (m), (acc))
 #endif
+/* The weighted mismatch of two vectors of phase codes: 0 where equal, else the codes' sum. */
+#define MISMATCH(a, b) select((floatv)(0.0f), (a) + (b), isnotequal((a), (b)))
 
 /* sites[q*K + j], dists[q*K + j]: the query's j-th nearest site and its weighted SSD,
  * nearest first, the lower site index first among equal distances. One work-item takes
@@ -66,6 +73,11 @@ __kernel void k_nearest(__global const float *queries, __global const int *keep,
             acc[b] = (floatv)(0.0f);
         for (int d = 0; d < DIM; ++d) {
             const floatv t = VLOAD(c, table_t + (size_t)d * n_pad);
+            if (d < NMIS) {
+                for (int b = 0; b < QB; ++b)
+                    acc[b] = ADD(MISMATCH((floatv)(x[b][d]), t), (floatv)(w[d]), acc[b]);
+                continue;
+            }
             for (int b = 0; b < QB; ++b) {
                 const floatv e = (floatv)(x[b][d]) - t;
                 acc[b] = TERM(e, (floatv)(w[d]), acc[b]);
@@ -114,13 +126,25 @@ static void query_vectors(const float *xs, __global const int *keep, __global co
     }
 }
 
-/* The weighted SSD between a query (x, w: query_vectors) and one row of the table, VW
- * contiguous terms at a time, the VW partial sums added at the end. */
+/* The weighted distance between a query (x, w: query_vectors) and one row of the table, VW
+ * contiguous terms at a time, the VW partial sums added at the end; with NMIS, the vectors
+ * holding codes compare them lane by lane (a lane below NMIS: mismatch, else squared). */
 static float row_distance(const floatv *x, const floatv *w, __global const float *row)
 {
     floatv acc = (floatv)(0.0f);
     for (int v = 0; v < NV; ++v) {
-        const floatv e = x[v] - VLOAD(v, row);
+        const floatv t = VLOAD(v, row);
+        const floatv e = x[v] - t;
+#if NMIS
+        if (v * VW < NMIS) {
+            float lanes[VW];
+            for (int l = 0; l < VW; ++l)
+                lanes[l] = v * VW + l < NMIS ? 1.0f : 0.0f;
+            const floatv code = VLOAD(0, lanes);
+            acc = ADD(code * MISMATCH(x[v], t) + ((floatv)(1.0f) - code) * e * e, w[v], acc);
+            continue;
+        }
+#endif
         acc = TERM(e, w[v], acc);
     }
     float lane[VW];
