@@ -79,7 +79,8 @@ class SearchParams:
         The weight of each of the parent square's 9 terms in the distance, against 1 for
         each of the k x k square's (the sources are silent; a departure, README, Choices).
         None (default): :data:`KOPF_PARENT_WEIGHT` for ``kopf``, whose gallery scores it
-        lifts, 1 for the others (unmeasured there).
+        lifts, 1 (the published form) for the others (``chen-wang`` gains from 4 too,
+        ``wl`` does not: README, Choices).
     init : {"upsample", "noise"}
         How a finer level starts: the coarser result, each voxel copied to its 2x2x2 block
         (default), or noise drawn from that level's exemplar pixels (Wei & Levoy's reading;
