@@ -1,7 +1,11 @@
-"""Shared fixtures: every OpenCL test runs on every visible device.
+"""Shared fixtures: every OpenCL test runs on one device, or on every device that compiles.
 
-Filter devices with ``PYOPENCL_TEST`` (a substring of the platform or device name).
-With no device: fail when ``$CI`` is set, skip locally with the reason.
+By default the ``device`` fixture is one device: PoCL where it compiles (the CPU device the
+project is specified on), else the first that compiles; the tests that compare runtimes use
+every one (:data:`ALL_DEVICE_SPECS`). ``CLSOLID_TEST_DEVICES=all`` runs every OpenCL test on
+every device that compiles (where PoCL and Intel's CPU runtime both do, that doubles the
+suite's time). Filter devices with ``PYOPENCL_TEST`` (a substring of the platform or
+device name). With no device: fail when ``$CI`` is set, skip locally with the reason.
 """
 
 from __future__ import annotations
@@ -31,9 +35,9 @@ def _device_specs() -> list[str]:
         return [f"!{exc}"]
     wanted = os.environ.get("PYOPENCL_TEST", "").lower()
     matching = [d for d in devices if not wanted or wanted in d["name"].lower() or wanted in d["platform"].lower()]
-    specs = [d["index"] for d in matching if d["compiles"]]
-    if specs:
-        return specs
+    compiling = [d for d in matching if d["compiles"]]
+    if compiling:  # PoCL first: with one device tested, it is the one the project is specified on
+        return [d["index"] for d in sorted(compiling, key=lambda d: "portable" not in d["platform"].lower())]
     if matching:
         why = "; ".join(f"{d['platform']} / {d['name']}: {d['probe_message']}" for d in matching)
         return [f"!no OpenCL device compiles ({why})"]
@@ -43,7 +47,10 @@ def _device_specs() -> list[str]:
 _DEVICES: dict = {}
 
 
-DEVICE_SPECS = _device_specs()
+#: Every device that compiles (PoCL first), or why there is none ("!reason").
+ALL_DEVICE_SPECS = _device_specs()
+#: The devices the ``device`` fixture takes: all of them with ``CLSOLID_TEST_DEVICES=all``, else the first.
+DEVICE_SPECS = ALL_DEVICE_SPECS if os.environ.get("CLSOLID_TEST_DEVICES", "").lower() == "all" else ALL_DEVICE_SPECS[:1]
 
 
 @pytest.fixture(params=DEVICE_SPECS, scope="session")
