@@ -168,7 +168,7 @@ def synthesize(
         terms' weight against 1 for the square's; default 4 for ``kopf``, 1 for the others),
         ``distance`` (``"weighted"``: the finest scale's squares compare a categorical
         exemplar's phases as names, by weighted mismatches; ``"squared"``: by their grey
-        values; ``"auto"``, default: weighted on 3 to 8 phases for ``kopf``), ``init (``"upsample"``,
+        values; ``"auto"``, default: weighted on 3 to 8 phases for ``kopf``), ``init`` (``"upsample"``,
         default, or ``"noise"``) and, for ``kopf``, ``rule`` (``"centres"``, the thesis's:
         each view's matched centre; ``"overlap"``, Kopf et al.'s: every overlapping matched
         square proposes a value), ``order`` (``"sets"``, default: conflict-free sets in

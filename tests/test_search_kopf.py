@@ -393,9 +393,10 @@ def test_the_parent_weight_scales_the_parent_terms_as_a_weight_would(device):
                            device="reference", insert_spacing=0)
     finally:
         driver.UPDATES["kopf"] = inner
-    coarse_block = seen[0][1] is None and seen[0][0]
+    assert seen[0][1] is None  # the coarser level comes first, without a parent
+    coarse_block = seen[0][0]
     finer = [c for _, c in seen if c is not None]
-    assert coarse_block is not False and finer
+    assert finer
     for parent in finer:
         np.testing.assert_array_equal(parent, 2.0 * coarse_block)
 

@@ -67,8 +67,9 @@ def main(argv: list[str] | None = None) -> None:
     print(f"device: {best * 1e3:.1f} ms; {pairs / 1e9:.2f} G candidate distances/s = {terms / 1e9:.2f} G terms/s "
           f"= {3 * terms / 1e9:.1f} GFLOP/s = {100 * 3 * terms / 1e9 / ref:.0f} % of matmul")
     # the same search on phase codes (kopf's distance="weighted"): brick at 4 levels, a fifth of the terms changed
-    codes = phase_codes(quantise(builtin_exemplar("brick"), 4))
-    coded, _ = exemplar_table(codes.encode(quantise(builtin_exemplar("brick"), 4)), k)
+    phases = quantise(builtin_exemplar("brick"), 4)
+    codes = phase_codes(phases)
+    coded, _ = exemplar_table(codes.encode(phases), k)
     q4 = coded[rng.integers(0, coded.shape[0], args.queries)]
     flip = rng.random(q4.shape) < 0.2
     q4[flip] = rng.choice(codes.codes, flip.sum())

@@ -17,6 +17,7 @@ every heuristic and is dropped. With ``distance="mismatch"`` every squared diffe
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 
@@ -86,11 +87,16 @@ def phase_costs(labels_img: np.ndarray) -> np.ndarray:
     rare phase's pixel weighs as much as the matrix's do together. Two phases with the same
     fraction are moved one float apart: the kernels tell phases apart by their costs."""
     f = np.bincount(labels_img.ravel().astype(np.intp)) / labels_img.size
-    costs = (0.5 / f).astype(np.float32)
-    for i in range(costs.size):
-        while np.any(costs[:i] == costs[i]):
-            costs[i] = np.nextafter(costs[i], np.float32(np.inf))
-    return costs
+    return make_distinct((0.5 / f).astype(np.float32), lambda c: np.nextafter(c, np.float32(np.inf)))
+
+
+def make_distinct(codes: np.ndarray, step: Callable[[Any], Any]) -> np.ndarray:
+    """*codes* (in place) with each code equal to an earlier one moved up by *step* until it
+    is not: the kernels tell phases apart by their codes."""
+    for i in range(1, codes.size):
+        while np.any(codes[:i] == codes[i]):
+            codes[i] = step(codes[i])
+    return codes
 
 
 def phase_sigma(image: np.ndarray, costs: np.ndarray | None = None) -> float:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exemplar import nearest_level_index
-from ..ml.model import phase_costs
+from ..ml.model import make_distinct, phase_costs
 
 
 @dataclass(frozen=True)
@@ -53,7 +53,4 @@ def phase_codes(exemplar: np.ndarray) -> PhaseCodes:
     labels = nearest_level_index(exemplar, phases).reshape(np.shape(exemplar))
     scale = 2.0 * float(np.var(exemplar)) / (phases.size - 1)
     codes = np.maximum(np.rint(scale * phase_costs(labels).astype(np.float64)), 1.0)
-    for i in range(1, codes.size):  # distinct: the matcher tells phases apart by their codes
-        while np.any(codes[:i] == codes[i]):
-            codes[i] += 1.0
-    return PhaseCodes(phases=phases.astype(np.float64), codes=codes)
+    return PhaseCodes(phases=phases.astype(np.float64), codes=make_distinct(codes, lambda c: c + 1.0))
