@@ -181,3 +181,43 @@ def test_gallery_merges_runs_split_by_exemplar(tool, tmp_path, capsys):
     assert gallery.main(["--merge", paths[0], str(tmp_path / "c" / "gallery.json"), "-o", str(tmp_path / "ac")]) == 2
     assert "seeds differ" in capsys.readouterr().err
     assert not (tmp_path / "aa").exists() and not (tmp_path / "ac").exists()
+
+
+def test_mirror_noise_spread_of_white_noise(tool):
+    """White noise: only the diagonal plane's voxels are their own mirror, so the mean is
+    1/side; the rest are independent pairs, so the spread is sqrt(2/N) (N voxels)."""
+    import numpy as np
+
+    noise = tool("mirror_noise")
+    side = 16
+    r = noise.mirror_spread(np.random.default_rng(5).standard_normal((64, 64)), side, samples=200, seed=1)
+    assert r.mean() == pytest.approx(1 / side, abs=0.006)
+    assert r.std() == pytest.approx(np.sqrt(2 / side**3), rel=0.2)
+
+
+def test_mirror_noise_covariance_holds_the_exemplars_sections(tool):
+    """Every vertical section of the modelled material has the exemplar's correlation
+    (symmetrised in x), and so does every direction about y (here: along z)."""
+    import numpy as np
+
+    rng = np.random.default_rng(2)
+    ex = np.cumsum(np.cumsum(rng.standard_normal((32, 32)), axis=0), axis=1)  # long-range, anisotropic
+    cov = tool("mirror_noise").section_covariance(ex, 12)
+    a = ex - ex.mean()
+    acf = np.real(np.fft.ifft2(np.abs(np.fft.fft2(a)) ** 2))
+    acf /= acf[0, 0]
+    sym = 0.5 * (acf + acf[:, (-np.arange(32)) % 32])
+    assert np.allclose(cov[0, :3, :3], sym[[0, 1, 2]][:, :3])  # (dy, dx) for dz = 0
+    assert np.allclose(cov[:3, :3, 0].T, sym[[0, 1, 2]][:, :3])  # (dy, dz) for dx = 0
+    assert np.allclose(cov[0, -1, :3], sym[-1, :3])  # negative dy wraps
+
+
+def test_mirror_noise_places_a_gallery_run_in_the_spread(capsys, tmp_path, tool):
+    import json
+
+    (tmp_path / "gallery.json").write_text(json.dumps({"runs": {"grains": [{"mirror": {"zx": 0.5}},
+                                                                           {"mirror": {"zx": 0.2}}]}}))
+    tool("mirror_noise").main(["--names", "grains", "porous80", "--side", "12", "--samples", "8",
+                               "--gallery", str(tmp_path / "gallery.json")])
+    out = capsys.readouterr().out
+    assert "| grains | " in out and "| 0.50 (+" in out and out.rstrip().endswith("| – |")
