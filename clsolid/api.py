@@ -11,6 +11,7 @@ import numpy as np
 from .errors import InputError
 from .ml.params import MLParams
 from .core.hostmemory import check_host_memory
+from .core.slices import seam_ratio
 from .ml.driver import SweepInfo, SynthesisResult, check_shape, resolve_seed, run_ml
 
 if TYPE_CHECKING:
@@ -30,7 +31,7 @@ _SEARCH_REPORTS = ("site_map",)
 #: thesis case is 9; the search methods: ch5_np_common's 7).
 DEFAULT_NEIGHBORHOOD = {"ml": MLParams().neighborhood, "wl": 7, "kopf": 7, "chen-wang": 7}
 _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited", "insert_slices",
-               "insert_spacing", "insert_piece",
+               "insert_spacing", "insert_piece", "seam_gap",
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
                "prune_similar", "prune_sample", "prune_min_weight", "falloff")
@@ -252,6 +253,11 @@ def synthesize(
         ``insert_piece`` (0, the default: each ``+in`` slice one exemplar window, as the
         thesis; N: a mosaic of N x N pieces, each from its own seeded window, N a multiple
         of 2^(scales-1), so that no slice starts as a copy of one window; README Choices),
+        ``seam_gap`` (where a ``+in`` slice tiles the exemplar across its edge, as a
+        staggered shift or a slice longer than the exemplar does, this many pixels on each
+        side of the seam are not written and are grown instead; 0 writes the seam; default
+        2 where the exemplar's seam shows, ``clsolid.core.slices.seam_ratio`` above 2, as
+        in photographs of coarse textures, else 0; README Choices),
         ``initial_temperature`` (1),
         ``bandwidth`` (Parzen h, one value or one per scale finest first; default
         ``bandwidth_factor`` x Silverman's rule per scale), ``bandwidth_factor`` (multiplies
@@ -353,7 +359,7 @@ def synthesize(
     params = MLParams(neighborhood=neighborhood, scales=scales, views=views, levels=levels,
                       heuristic="h2-product" if heuristic is None else heuristic, **{k: options[k] for k in _ML_OPTIONS if k in options})
     image, levels_of, seed = _load(exemplar, levels, rng, options)
-    params = params.for_exemplar(levels_of.values.size, levels_of.exact)
+    params = params.for_exemplar(levels_of.values.size, levels_of.exact, seam_ratio(image))
     backend = make_backend(device, {k: options[k] for k in _BACKEND_OPTIONS if k in options})
     hook = None
     if options.get("checkpoint") is not None:

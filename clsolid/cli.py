@@ -126,6 +126,9 @@ def _add_synth(sub) -> None:
                    help="+in slices as mosaics of N x N pieces, each from its own seeded exemplar window "
                         "(a multiple of 2^(scales-1)); 0 = one window a slice, as the thesis "
                         "(default %(default)s)")
+    p.add_argument("--seam-gap", type=int, default=d.seam_gap,
+                   help="pixels of a +in slice left unwritten on each side of a seam where it tiles the exemplar "
+                        "across its edge; 0 = write the seam (default: 2 where the exemplar's seam shows, else 0)")
     p.add_argument("--slice-layout", choices=SLICE_LAYOUTS, default=d.slice_layout,
                    help="+in slices at the same depths and tiling in every view, or staggered between "
                         "views with seeded shifts (default %(default)s)")
@@ -302,8 +305,8 @@ def _tracker(levels: int, records: list):
 
 #: Flags that only one method reads: given to the other, they are an error, not ignored.
 _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "inherited",
-            "insert_slices", "insert_spacing", "insert_piece", "slice_layout", "initial_temperature", "bandwidth",
-            "bandwidth_factor",
+            "insert_slices", "insert_spacing", "insert_piece", "seam_gap", "slice_layout", "initial_temperature",
+            "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
             "prune_similar", "prune_sample", "prune_min_weight", "falloff", "tile", "scheduler", "workers", "indices",
             "track")
@@ -343,7 +346,7 @@ def _ml_options(args) -> dict:
     """The ``synthesize`` options of ``--method ml`` from the command line."""
     options = dict(pyramid=args.pyramid, xi=args.xi, stop_fraction=args.stop_fraction, max_sweeps=args.max_sweeps,
                    upsampling=args.upsampling, inherited=args.inherited, insert_slices=args.insert_slices,
-                   insert_spacing=args.insert_spacing, insert_piece=args.insert_piece,
+                   insert_spacing=args.insert_spacing, insert_piece=args.insert_piece, seam_gap=args.seam_gap,
                    slice_layout=args.slice_layout,
                    initial_temperature=args.initial_temperature, builtin_size=args.builtin_size,
                    relaxation=args.relaxation, anneal_start=args.anneal_start, anneal_cooling=args.anneal_cooling,

@@ -97,6 +97,8 @@ def test_same_seed_same_file(tmp_path, device):
     (["--distance", "mismatch"], "distance", "mismatch"),
     ([], "insert_piece", 0),  # each +in slice one exemplar window
     (["--insert-piece", "4"], "insert_piece", 4),
+    ([], "seam_gap", 2),  # +in slices leave out the seams where they wrap the exemplar
+    (["--seam-gap", "0"], "seam_gap", 0),
     ([], "falloff", 3.0),  # brick is grey: auto weighs the terms by a Gaussian of sigma 3
     (["--falloff", "0"], "falloff", 0.0),
 ])

@@ -110,8 +110,9 @@ def _shift_of(slice_, exemplar, step, cols):
 
 
 def test_staggered_slices_break_the_x_z_symmetry_consistently_across_scales(brick_labels):
-    """Staggered +in: the views' slices at different depths, each with its own shift, the same at every scale."""
-    params = MLParams(neighborhood=3, scales=3, insert_slices=2, max_sweeps=1, slice_layout="staggered")
+    """Staggered +in: the views' slices at different depths, each with its own shift, the same at every scale
+    (written whole, seams and all: the seam gap is the next test's)."""
+    params = MLParams(neighborhood=3, scales=3, insert_slices=2, max_sweeps=1, slice_layout="staggered", seam_gap=0)
     shape = (16, 24, 16)
     starts = scale_starts(brick_labels[:32, :32], shape, params)
     depths = inserted_depths(shape, params)
@@ -130,6 +131,69 @@ def test_staggered_slices_break_the_x_z_symmetry_consistently_across_scales(bric
     assert shifts[0] == shifts[1] == shifts[2]  # the same full-resolution shifts at every scale
     assert len(set(shifts[0])) > 1  # slices show different parts of the exemplar
     assert not np.array_equal(inserted_depths(shape, MLParams())["front"], depths["right"])
+
+
+def _away_from_seams(n, shift, size, band):
+    """The rule, written out: pixel i shows exemplar row (i + shift) % size; a seam lies before
+    every i > 0 that shows row 0; pixels within *band* of one are left out."""
+    ok = np.ones(n, bool)
+    for i in range(1, n):
+        if (i + shift) % size == 0:
+            ok[max(0, i - band): i + band] = False
+    return ok
+
+
+@pytest.mark.parametrize("layout", ["staggered", "aligned"])
+def test_slices_leave_out_the_seams_where_they_wrap_the_exemplar(layout):
+    """seam_gap: a +in slice shows the exemplar at one shift, except the pixels within
+    seam_gap of a seam where it wraps, which are left as they were (and not marked inserted)."""
+    from clsolid.core.slices import insert_slices
+
+    ex = np.arange(12 * 16).reshape(12, 16)  # a pixel's value says where it came from
+    shape = (40, 28, 36)  # slices longer than the exemplar: every one wraps, at any shift
+    params = MLParams(insert_slices=3, scales=2, slice_layout=layout, seam_gap=2)
+    vol = np.full(shape, -1)
+    mask = insert_slices(vol, ex, params, 0, 7, shape)
+    assert ((vol >= 0) == mask).all()
+    depths = inserted_depths(shape, params)
+    # where two views' slices cross, either may show in the other's gap: look away from the crossings
+    free_x, free_z = (np.setdiff1d(np.arange(shape[a]), depths[v]) for a, v in ((2, "right"), (0, "front")))
+    planes = [(vol[z], free_x) for z in depths["front"]] + [(vol[:, :, x].T, free_z) for x in depths["right"]]
+    gaps = 0
+    for plane, cols in planes:
+        r, c = np.nonzero(plane[:, cols] >= 0)
+        v = plane[:, cols][r[0], c[0]]
+        shift = ((v // 16 - r[0]) % 12, (v % 16 - cols[c[0]]) % 16)
+        rows_ok = _away_from_seams(plane.shape[0], shift[0], 12, 2)
+        cols_ok = _away_from_seams(plane.shape[1], shift[1], 16, 2)
+        expected = np.outer(rows_ok, cols_ok)[:, cols]
+        np.testing.assert_array_equal(plane[:, cols] >= 0, expected)
+        rr, cc = np.nonzero(expected)
+        np.testing.assert_array_equal(plane[:, cols][rr, cc], ex[(rr + shift[0]) % 12, (cols[cc] + shift[1]) % 16])
+        gaps += (~expected).sum()
+    assert gaps > 0
+    whole = MLParams(insert_slices=3, scales=2, slice_layout=layout, seam_gap=0)
+    assert insert_slices(np.full(shape, -1), ex, whole, 0, 7, shape).sum() > mask.sum()  # 0: seams written
+
+
+def test_the_seam_gap_is_taken_where_the_exemplars_seam_shows():
+    """seam_gap=None: 2 for an exemplar whose wrap shows (a photograph's edges), 0 for one that
+    tiles seamlessly; the ratio is about 1 for a periodic texture and 0 for a constant image."""
+    from clsolid.core.slices import SEAM_SHOWS, seam_ratio
+    from clsolid.gallery import gallery_exemplar
+
+    rng = np.random.default_rng(1)
+    k = np.fft.fftfreq(64)
+    smooth = np.exp(-200 * (k[:, None] ** 2 + k[None, :] ** 2))  # a periodic field, features ~5 px
+    periodic = np.real(np.fft.ifft2(np.fft.fft2(rng.standard_normal((64, 64))) * smooth))
+    ramp = np.add.outer(np.arange(64.0), np.arange(64.0))  # its wrap jumps by 63 where neighbours differ by 1
+    assert 0.7 < seam_ratio(periodic) < 1.3 and seam_ratio(ramp) > 30 and seam_ratio(np.ones((8, 8))) == 0
+    assert seam_ratio(gallery_exemplar("brick", 64)) > SEAM_SHOWS > seam_ratio(gallery_exemplar("porous50", 64))
+    params = MLParams()
+    assert params.seam_gap is None
+    assert params.for_exemplar(32, False, seam_ratio(ramp)).seam_gap == 2
+    assert params.for_exemplar(32, False, seam_ratio(periodic)).seam_gap == 0
+    assert MLParams(seam_gap=3).for_exemplar(32, False, 9.0).seam_gap == 3  # given, kept
 
 
 def test_pieced_slices_are_mosaics_of_windows_the_same_at_every_scale():
@@ -172,3 +236,6 @@ def test_piece_side_is_checked():
     with pytest.raises(InputError, match="insert_piece"):
         MLParams(insert_piece=4.0)
     assert MLParams().insert_piece == 0 and MLParams(scales=6, insert_piece=64).insert_piece == 64
+    for bad in (-1, 1.5, True, "2"):
+        with pytest.raises(InputError, match="seam_gap"):
+            MLParams(seam_gap=bad)

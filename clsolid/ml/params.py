@@ -8,7 +8,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 from ..core.checks import int_in, one_of
 from ..core.views import DEPTH_AXIS, VIEW_AXES, VIEW_SETS  # noqa: F401 (this method's names too)
-from ..core.slices import FALLBACK_SPACING
+from ..core.slices import FALLBACK_SPACING, SEAM_GAP, SEAM_SHOWS
 from ..errors import InputError
 
 #: clsolid name -> (kernel code, thesis tag, paper tag). One table, used by the API, the CLI,
@@ -125,6 +125,7 @@ class MLParams:
     insert_spacing: float | None = None  # None: by the exemplar (for_exemplar), else DEFAULT_INSERT_SPACING
     slice_layout: str = "staggered"
     insert_piece: int = 0  # 0: each +in slice one exemplar window; N: N x N pieces (README, Choices)
+    seam_gap: int | None = None  # pixels left out by a +in slice's wrap seam; None: by the exemplar (for_exemplar)
     initial_temperature: float = 1.0
     bandwidth_factor: float | tuple[float, ...] | None = None
     bandwidth: tuple[float, ...] | None = field(default=None)
@@ -168,6 +169,8 @@ class MLParams:
             raise InputError(f"insert_piece={self.insert_piece!r} must be 0 (whole exemplar windows) or a "
                              f"multiple of 2^(scales-1) = {2 ** (self.scales - 1)}, so that every scale "
                              "has the same pieces")
+        if self.seam_gap is not None:
+            int_in("seam_gap", self.seam_gap, 0)
         t0 = self.initial_temperature
         if not (isinstance(t0, numbers.Real) and 0 < t0 <= 1):
             raise InputError(f"initial_temperature={t0!r} must be in (0, 1] (1 = no confidence, the thesis)")
@@ -219,10 +222,11 @@ class MLParams:
                              f"({self.scales} values, finest first)")
         return tuple(float(v) for v in values)
 
-    def for_exemplar(self, n_levels: int, categorical: bool) -> "MLParams":
+    def for_exemplar(self, n_levels: int, categorical: bool, seam_ratio: float = 0.0) -> "MLParams":
         """These parameters with ``likelihood="auto"``, ``distance="auto"``,
-        ``insert_spacing=None`` and ``falloff=None`` resolved for an exemplar of *n_levels*
-        levels, *categorical* if they are its own values (not a quantisation of grey ones)."""
+        ``insert_spacing=None``, ``falloff=None`` and ``seam_gap=None`` resolved for an exemplar
+        of *n_levels* levels, *categorical* if they are its own values (not a quantisation of
+        grey ones), whose :func:`~clsolid.core.slices.seam_ratio` is *seam_ratio*."""
         phases = categorical and n_levels <= AUTO_PRUNED_LEVELS
         likelihood = ("pruned" if phases else "exact") if self.likelihood == "auto" else self.likelihood
         # On two phases the weights are one constant: the plain count is the same distance.
@@ -234,8 +238,11 @@ class MLParams:
         falloff = self.falloff
         if falloff is None:
             falloff = 0.0 if phases else GREY_FALLOFF
+        gap = self.seam_gap
+        if gap is None:
+            gap = SEAM_GAP if seam_ratio > SEAM_SHOWS else 0
         return replace(self, likelihood=likelihood, distance=distance, insert_spacing=spacing,
-                       falloff=float(falloff))
+                       falloff=float(falloff), seam_gap=gap)
 
     @property
     def view_names(self) -> tuple[str, ...]:

@@ -174,9 +174,12 @@ class SearchParams:
     distance: str = "auto"
 
     #: The anchor slices' layout, count and make (read by :mod:`clsolid.core.slices`): always
-    #: staggered, their number set by ``insert_spacing``, each slice one exemplar window.
+    #: staggered, their number set by ``insert_spacing``, each slice one exemplar window, seams
+    #: included where it wraps the exemplar (the likelihood method's seam gap was measured for it
+    #: alone; on kopf's anchors, coarse levels only, a 24^3 lamellae block lost its mirror target).
     slice_layout = "staggered"
     insert_piece = 0
+    seam_gap = 0
 
     def __post_init__(self) -> None:
         one_of("method", self.method, METHODS)
