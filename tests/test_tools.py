@@ -221,3 +221,20 @@ def test_mirror_noise_places_a_gallery_run_in_the_spread(capsys, tmp_path, tool)
                                "--gallery", str(tmp_path / "gallery.json")])
     out = capsys.readouterr().out
     assert "| grains | " in out and "| 0.50 (+" in out and out.rstrip().endswith("| – |")
+
+
+def test_photo_windows_stay_inside_the_photograph_and_are_scored(capsys, tool):
+    import numpy as np
+
+    photo_windows = tool("photo_windows")
+    photo = np.arange(40 * 40).reshape(40, 40)
+    stack = photo_windows.windows(photo, 16, 50, seed=3)
+    assert stack.shape == (50, 16, 16)
+    r, c = np.divmod(stack[:, 0, 0], 40)  # each window's corner
+    assert (r <= 24).all() and (c <= 24).all()
+    np.testing.assert_array_equal(stack, [photo[i: i + 16, j: j + 16] for i, j in zip(r, c)])  # never wrapped
+    away = photo_windows.windows(photo, 16, 50, seed=3, away=True)
+    assert (np.divmod(away[:, 0, 0], 40)[0] >= 20).all()
+    photo_windows.main(["--names", "gravel", "--sides", "24", "--seeds", "1"])
+    row = capsys.readouterr().out.splitlines()[-1].split("|")
+    assert row[1].strip() == "gravel" and row[2].strip() == "24²" and abs(float(row[5])) < 1.0

@@ -1,0 +1,69 @@
+"""What does the real material score? Windows of the photograph an exemplar was cut from.
+
+brick, grass and gravel are the top-left quarter of a scikit-image photograph (512^2),
+area-averaged 4x to 64^2. The whole photograph at that scale (128^2) holds more of the same
+wall or lawn: windows of it, of a volume's slice size, at seeded offsets that stay inside it,
+are stacked like a volume's front slices and scored against the 64^2 exemplar with
+``clsolid.metrics.evaluate``, as tools/gallery.py scores a volume. Their scores are what
+the material itself gets from the metrics, the level a synthesis cannot be asked to beat
+(windows from the exemplar's own quarter overlap it; ``--away`` keeps them to the other
+three quarters' corner, which shows how far the photograph is from stationary).
+
+    python tools/photo_windows.py                       # brick, grass, gravel; 48^2 and 96^2 windows
+    python tools/photo_windows.py --names brick --sides 48 --seeds 1 2 3
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import numpy as np
+
+from clsolid import metrics
+from clsolid.exemplar import BUILTINS, builtin_exemplar
+
+#: The scores printed: (key in clsolid.metrics.evaluate's summary, column title).
+SCORES = (("histogram_kl", "hist"), ("patch_sw", "patch"), ("autocorrelation_l2", "autocorr"))
+
+
+def windows(photo: np.ndarray, side: int, count: int, seed: int, away: bool = False) -> np.ndarray:
+    """*count* ``side``-square windows of *photo* at seeded offsets inside it, stacked (count, side, side).
+    With *away*, only windows whose top-left corner lies in the far half of both axes."""
+    rng = np.random.default_rng(seed)
+    low = photo.shape[0] // 2 if away else 0
+    if photo.shape[0] - side < low:
+        raise SystemExit(f"windows of {side} do not fit in the photograph's {'far corner' if away else 'side'}")
+    rows = rng.integers(low, photo.shape[0] - side + 1, count)
+    cols = rng.integers(low, photo.shape[1] - side + 1, count)
+    return np.stack([photo[r: r + side, c: c + side] for r, c in zip(rows, cols)])
+
+
+def scores(exemplar: np.ndarray, stack: np.ndarray) -> dict[str, float]:
+    """The calibrated scores of a stack of front slices against the exemplar."""
+    report = metrics.evaluate(exemplar, stack, views=["front"], constrained=["front"], rng=0)
+    return {row["metric"]: row["score"] for row in report["summary"] if row["score"] is not None}
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--names", nargs="+", default=list(BUILTINS), choices=BUILTINS)
+    ap.add_argument("--sides", nargs="+", type=int, default=[48, 96], help="window sides (a volume's slice size)")
+    ap.add_argument("--seeds", nargs="+", type=int, default=[1, 2])
+    ap.add_argument("--away", action="store_true", help="windows from the quarter farthest from the exemplar")
+    args = ap.parse_args(argv)
+    print("| exemplar | window | seed | " + " | ".join(title for _, title in SCORES) + " |")
+    print("|---|---|---|" + "---|" * len(SCORES))
+    for name in args.names:
+        exemplar = builtin_exemplar(name, size=64)
+        photo = builtin_exemplar(name, size=128, region=512)  # the whole photograph at the exemplar's scale
+        for side in args.sides:
+            for seed in args.seeds:
+                got = scores(exemplar, windows(photo, side, side, seed, args.away))
+                cells = " | ".join("–" if key not in got else f"{got[key]:.2f}" for key, _ in SCORES)
+                print(f"| {name} | {side}² | {seed} | {cells} |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
