@@ -175,8 +175,8 @@ class SearchParams:
 
     #: The anchor slices' layout, count and make (read by :mod:`clsolid.core.slices`): always
     #: staggered, their number set by ``insert_spacing``, each slice one exemplar window, seams
-    #: included where it wraps the exemplar (the likelihood method's seam gap was measured for it
-    #: alone; on kopf's anchors, coarse levels only, a 24^3 lamellae block lost its mirror target).
+    #: included where it wraps the exemplar (the likelihood method's seam gap did not help kopf's
+    #: brick or tissue, and cost a 24^3 lamellae block its mirror target: README, Choices).
     slice_layout = "staggered"
     insert_piece = 0
     seam_gap = 0
