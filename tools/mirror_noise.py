@@ -36,14 +36,12 @@ import numpy as np
 
 from clsolid.gallery import gallery_exemplar, gallery_names
 from clsolid.metrics import mirror_chance, mirror_correlation
+from clsolid.metrics.symmetry import periodic_autocorrelation
 
 
 def section_covariance(exemplar: np.ndarray, side: int) -> np.ndarray:
     """``(side,)*3`` correlation, toroidal lags: the exemplar's at (dy, horizontal distance)."""
-    ex = np.asarray(exemplar, np.float64)
-    a = ex - ex.mean()
-    acf = np.real(np.fft.ifft2(np.abs(np.fft.fft2(a)) ** 2))
-    acf /= acf[0, 0]
+    acf = periodic_autocorrelation(exemplar)  # the periodic exemplar, as mirror_chance takes it
     h, w = acf.shape
     d = np.arange(side)
     lag = np.minimum(d, side - d)

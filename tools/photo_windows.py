@@ -31,11 +31,11 @@ def windows(photo: np.ndarray, side: int, count: int, seed: int, away: bool = Fa
     """*count* ``side``-square windows of *photo* at seeded offsets inside it, stacked (count, side, side).
     With *away*, only windows whose top-left corner lies in the far half of both axes."""
     rng = np.random.default_rng(seed)
-    low = photo.shape[0] // 2 if away else 0
-    if photo.shape[0] - side < low:
+    low = [n // 2 if away else 0 for n in photo.shape]
+    if any(n - side < lo for n, lo in zip(photo.shape, low)):
         raise SystemExit(f"windows of {side} do not fit in the photograph's {'far corner' if away else 'side'}")
-    rows = rng.integers(low, photo.shape[0] - side + 1, count)
-    cols = rng.integers(low, photo.shape[1] - side + 1, count)
+    rows = rng.integers(low[0], photo.shape[0] - side + 1, count)
+    cols = rng.integers(low[1], photo.shape[1] - side + 1, count)
     return np.stack([photo[r: r + side, c: c + side] for r, c in zip(rows, cols)])
 
 

@@ -120,23 +120,32 @@ def mirror_chance(exemplar: Any, side: int) -> float:
     InputError
         Not a 2D real image, constant, or ``side`` below 1.
     """
-    ex = np.asarray(exemplar, dtype=np.float64)
-    if ex.ndim != 2 or ex.size == 0 or not np.all(np.isfinite(ex)):
-        raise InputError(f"exemplar must be a finite 2D image, got shape {ex.shape}")
     side = int(side)
     if side < 1:
         raise InputError(f"side={side} must be at least 1")
-    a = ex - ex.mean()
-    power = np.abs(np.fft.fft2(a)) ** 2
+    acf = periodic_autocorrelation(exemplar)
+    d = np.arange(-(side - 1), side)
+    lag = np.minimum(np.abs(d), side - np.abs(d))
+    h, w = acf.shape
+    rho = 0.5 * (acf[lag % h, lag % w] + acf[lag % h, -lag % w])
+    return float(np.sum((side - np.abs(d)) * rho) / side**2)
+
+
+def periodic_autocorrelation(exemplar: Any) -> np.ndarray:
+    """The exemplar's autocorrelation with the image taken as periodic.
+
+    Returns an array of the exemplar's shape: ``[dy % H, dx % W]`` holds the correlation at
+    the toroidal lag (dy, dx), 1 at (0, 0). Raises :class:`InputError` for anything but a
+    finite 2D image, or a constant one (it has no correlation).
+    """
+    ex = np.asarray(exemplar, dtype=np.float64)
+    if ex.ndim != 2 or ex.size == 0 or not np.all(np.isfinite(ex)):
+        raise InputError(f"exemplar must be a finite 2D image, got shape {ex.shape}")
+    power = np.abs(np.fft.fft2(ex - ex.mean())) ** 2
     if power.sum() <= 0:
         raise InputError("exemplar is constant: it has no correlation to compare with")
     acf = np.real(np.fft.ifft2(power))
-    acf /= acf[0, 0]
-    d = np.arange(-(side - 1), side)
-    lag = np.minimum(np.abs(d), side - np.abs(d))
-    h, w = ex.shape
-    rho = 0.5 * (acf[lag % h, lag % w] + acf[lag % h, -lag % w])
-    return float(np.sum((side - np.abs(d)) * rho) / side**2)
+    return acf / acf[0, 0]
 
 
 @dataclass(frozen=True)
