@@ -197,8 +197,9 @@ def _add_synth(sub) -> None:
     p.add_argument("--device", default=None,
                    help="OpenCL device: PYOPENCL_CTX syntax ('0:1'), a name ('pocl', 'H100'), cpu/gpu, or 'reference'")
     p.add_argument("--voxel-size", type=float, nargs="+", default=None, metavar="SIZE",
-                   help="voxel size for the TIFF (one value, or Z Y X)")
-    p.add_argument("--unit", default="um", help="unit of --voxel-size (default um)")
+                   help="voxel size for the TIFF (one value, or Z Y X; default: the exemplar file's own pixel "
+                        "size, where it records one)")
+    p.add_argument("--unit", default=None, help="unit of --voxel-size (default um)")
     p.add_argument("--indices", action="store_true",
                    help="write level indices (0..levels-1) instead of the exemplar's own values")
     p.add_argument("--preview", type=Path, default=None,
@@ -333,6 +334,31 @@ def _check_resume_flags(args) -> None:
                          f"checkpoints there): drop {flags}")
 
 
+def _voxel_size(args) -> tuple[object, str | None, str | None]:
+    """``(voxel_size, unit, source)`` for the output: ``--voxel-size`` (with ``--unit``), else the
+    exemplar file's own pixel size (a voxel is an exemplar pixel: Z and X take its width, Y its
+    height), else none."""
+    from .exemplar import BUILTINS
+    from .volumeio import image_pixel_size
+
+    if args.voxel_size is not None:
+        if len(args.voxel_size) not in (1, 3):
+            raise InputError(f"--voxel-size takes one value or three (Z Y X), not {len(args.voxel_size)}")
+        size = args.voxel_size[0] if len(args.voxel_size) == 1 else tuple(args.voxel_size)
+        return size, args.unit or "um", "--voxel-size"
+    if args.unit is not None:
+        raise InputError("--unit is the unit of --voxel-size: give both (without either, the output takes "
+                         "the exemplar's own pixel size, where its file records one)")
+    if args.resume is not None or args.exemplar in BUILTINS:
+        return None, None, None
+    found = image_pixel_size(args.exemplar)
+    if found is None:
+        return None, None, None
+    (y, x), unit = found
+    print(f"voxel size (Z Y X) from the exemplar: {x:g} {y:g} {x:g} {unit}", file=sys.stderr)
+    return (x, y, x), unit, "exemplar"
+
+
 def _check_method_flags(args) -> None:
     """Refuse a flag the chosen method would not read (set away from its default)."""
     # kopf balances its phases and anchors slices too; the search parameters say which method does not
@@ -387,11 +413,7 @@ def cmd_synth(args) -> int:
         raise InputError(f"--output {args.output} must end in .tif, .tiff or .npy")
     if args.preview is not None and args.preview.suffix.lower() != ".png":
         raise InputError(f"--preview {args.preview} must end in .png")
-    voxel_size = None
-    if args.voxel_size is not None:
-        if len(args.voxel_size) not in (1, 3):
-            raise InputError(f"--voxel-size takes one value or three (Z Y X), not {len(args.voxel_size)}")
-        voxel_size = args.voxel_size[0] if len(args.voxel_size) == 1 else tuple(args.voxel_size)
+    voxel_size, unit, voxel_from = _voxel_size(args)
     _check_method_flags(args)
     if args.resume is not None:
         _check_resume_flags(args)
@@ -439,7 +461,7 @@ def cmd_synth(args) -> int:
                                 full_output=True, **options)
     written_kind = "indices" if args.indices else "values"
     written = save_volume(args.output, result.labels if args.indices else result.volume,
-                          voxel_size=voxel_size, unit=args.unit,
+                          voxel_size=voxel_size, unit=unit or "um",
                           metadata={"seed": result.seed, "written": written_kind,
                                     "levels": int(result.level_values.size)})
     sidecar = written.with_suffix(".json")
@@ -447,7 +469,7 @@ def cmd_synth(args) -> int:
             "resumed_from": None if args.resume is None else str(args.resume), "written": written_kind,
             "values_exact": result.values_exact, "level_values": result.level_values.tolist(),
             "seed": result.seed, "device": result.device, "preset": args.preset, "params": result.params,
-            "voxel_size": voxel_size, "unit": args.unit,
+            "voxel_size": voxel_size, "unit": unit, "voxel_size_from": voxel_from,
             "versions": versions(), "timings": result.timings,
             "command": " ".join(sys.argv), "written_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
     sidecar.write_text(json.dumps(meta, indent=2, default=float))

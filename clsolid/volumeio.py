@@ -123,6 +123,77 @@ def _tiff_info(tif: tifffile.TiffFile) -> tuple[dict, dict]:
     return info, props
 
 
+#: TIFF ResolutionUnit 3: the resolution is in pixels per centimetre. Unit 2 (inch) is not read
+#: as a pixel size: most writers put a display resolution of 72 or 96 dpi there.
+_RESOLUTION_CM = 3
+
+
+def _ome_pixel_size(xml: str | None) -> tuple[tuple[float, float], str] | None:
+    """``((y, x), unit)`` from an OME-XML header's first ``Pixels`` element, or None."""
+    import xml.etree.ElementTree as ElementTree
+
+    try:
+        root = ElementTree.fromstring(xml or "")
+    except ElementTree.ParseError:
+        return None
+    for el in root.iter():
+        if el.tag.rsplit("}", 1)[-1] != "Pixels":
+            continue
+        unit = el.get("PhysicalSizeXUnit", "\u00b5m")  # OME's default unit
+        if el.get("PhysicalSizeX") is None or el.get("PhysicalSizeYUnit", unit) != unit:
+            return None
+        try:
+            x = float(el.get("PhysicalSizeX"))
+            y = float(el.get("PhysicalSizeY", x))
+        except ValueError:
+            return None
+        return ((y, x), unit) if min(x, y) > 0 and math.isfinite(x + y) else None
+    return None
+
+
+def _tiff_pixel_size(tif: tifffile.TiffFile) -> tuple[tuple[float, float], str] | None:
+    """``((y, x), unit)`` from an open TIFF's calibration, or None (see :func:`image_pixel_size`)."""
+    info, _ = _tiff_info(tif)
+    if info["voxel_size"] is not None and info["unit"] != "pixel":
+        return (info["voxel_size"][1], info["voxel_size"][2]), info["unit"]
+    if tif.is_ome:
+        return _ome_pixel_size(tif.ome_metadata)
+    tags = tif.pages.first.tags
+    unit, xres, yres = (tags.get(name) for name in ("ResolutionUnit", "XResolution", "YResolution"))
+    if unit is None or int(unit.value) != _RESOLUTION_CM or xres is None:
+        return None
+    xppcm = _rational(xres.value)
+    yppcm = _rational(yres.value) if yres is not None else xppcm
+    return ((1e4 / yppcm, 1e4 / xppcm), "um") if xppcm and yppcm else None
+
+
+def image_pixel_size(path: PathLike) -> tuple[tuple[float, float], str] | None:
+    """The size of a 2D image file's pixels, where the file records it.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An image file (any of the exemplar formats).
+
+    Returns
+    -------
+    tuple or None
+        ``((y, x), unit)`` from a TIFF's ImageJ calibration, its OME-XML header
+        (``PhysicalSizeY``, ``PhysicalSizeX``) or a resolution in pixels per centimetre
+        (then in ``"um"``). None for PNG and ``.npy`` files, a file that cannot be read,
+        an uncalibrated TIFF, and a resolution in inches (most writers put a display
+        resolution of 72 or 96 dpi there, not the size of a pixel).
+    """
+    p = pathlib.Path(path)
+    if p.suffix.lower() not in (".tif", ".tiff") or not p.is_file():
+        return None
+    try:
+        with tifffile.TiffFile(p) as tif:
+            return _tiff_pixel_size(tif)
+    except (OSError, ValueError, tifffile.TiffFileError):
+        return None
+
+
 def _read_tiff(path: pathlib.Path, param: str) -> tuple[np.ndarray, dict]:
     """Read a TIFF as stored (a stack as ``(Z, Y, X)``) with its calibration."""
     try:

@@ -155,3 +155,43 @@ def test_devices_lists_a_table(capsys, device):
     assert main(["devices"]) == 0
     out = capsys.readouterr().out
     assert "platform / name" in out and device.device.name.strip() in out
+
+
+def _calibrated_exemplar(tmp_path):
+    """A 24 x 24 TIFF whose pixels are 0.25 nm high and 0.5 nm wide (ImageJ calibration)."""
+    from clsolid.gallery import gallery_exemplar
+    import tifffile
+
+    path = tmp_path / "ex.tif"
+    tifffile.imwrite(path, gallery_exemplar("porous50", 64)[:24, :24].astype(np.uint8), imagej=True,
+                     resolution=(2.0, 4.0), metadata={"unit": "nm"})
+    return path
+
+
+def test_output_takes_the_exemplars_pixel_size(tmp_path, capsys, device):
+    ex = _calibrated_exemplar(tmp_path)
+    assert main(["synth", str(ex), "-o", str(tmp_path / "v.tif"), *FAST, "-q"]) == 0
+    _, info = load_volume(tmp_path / "v.tif")
+    assert info["voxel_size"] == pytest.approx((0.5, 0.25, 0.5)) and info["unit"] == "nm"  # Z and X: the width
+    meta = json.loads((tmp_path / "v.json").read_text())
+    assert meta["voxel_size_from"] == "exemplar" and meta["unit"] == "nm"
+    assert "from the exemplar: 0.5 0.25 0.5 nm" in capsys.readouterr().err
+    # --voxel-size wins; without a unit it is um
+    assert main(["synth", str(ex), "-o", str(tmp_path / "w.tif"), *FAST, "-q", "--voxel-size", "3"]) == 0
+    _, info = load_volume(tmp_path / "w.tif")
+    assert info["voxel_size"] == pytest.approx((3.0, 3.0, 3.0)) and info["unit"] == "um"
+    assert json.loads((tmp_path / "w.json").read_text())["voxel_size_from"] == "--voxel-size"
+
+
+def test_unit_without_voxel_size_is_usage_error(tmp_path, capsys):
+    ex = _calibrated_exemplar(tmp_path)
+    assert main(["synth", str(ex), "-o", str(tmp_path / "v.tif"), *FAST, "--unit", "nm"]) == EXIT_USAGE
+    assert "--unit is the unit of --voxel-size" in capsys.readouterr().err
+    assert not (tmp_path / "v.tif").exists()
+
+
+def test_uncalibrated_exemplar_gives_no_voxel_size(tmp_path, device):
+    assert main(["synth", "brick", "-o", str(tmp_path / "v.tif"), *FAST, "-q"]) == 0
+    _, info = load_volume(tmp_path / "v.tif")
+    assert info["voxel_size"] is None
+    assert json.loads((tmp_path / "v.json").read_text())["voxel_size_from"] is None

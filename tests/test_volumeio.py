@@ -12,7 +12,7 @@ from PIL import Image
 
 from clsolid.core.hostmemory import available_bytes
 from clsolid.errors import InputError, LargeTiffWarning
-from clsolid.volumeio import load_volume, save_volume
+from clsolid.volumeio import image_pixel_size, load_volume, save_volume
 
 
 @pytest.fixture
@@ -286,3 +286,36 @@ def test_load_pickled_npy_is_error(tmp_path):
     np.save(path, np.array([{"a": 1}], dtype=object), allow_pickle=True)
     with pytest.raises(InputError, match="path"):
         load_volume(path)
+
+
+def _image(path, **kwargs):
+    tifffile.imwrite(path, np.arange(48, dtype=np.uint8).reshape(6, 8), **kwargs)
+    return path
+
+
+def test_image_pixel_size_from_imagej_calibration(tmp_path):
+    path = _image(tmp_path / "ij.tif", imagej=True, resolution=(2.0, 4.0), metadata={"unit": "nm"})
+    assert image_pixel_size(path) == ((pytest.approx(0.25), pytest.approx(0.5)), "nm")  # (y, x)
+
+
+def test_image_pixel_size_from_ome_header(tmp_path):
+    path = _image(tmp_path / "o.ome.tif", ome=True, metadata={
+        "axes": "YX", "PhysicalSizeX": 0.1, "PhysicalSizeXUnit": "nm", "PhysicalSizeY": 0.2, "PhysicalSizeYUnit": "nm"})
+    assert image_pixel_size(path) == ((pytest.approx(0.2), pytest.approx(0.1)), "nm")
+
+
+def test_image_pixel_size_from_centimetres_not_inches(tmp_path):
+    cm = _image(tmp_path / "cm.tif", resolution=(5000.0, 2500.0), resolutionunit="CENTIMETER")
+    assert image_pixel_size(cm) == ((pytest.approx(4.0), pytest.approx(2.0)), "um")  # 10^4 um / pixels per cm
+    inch = _image(tmp_path / "in.tif", resolution=(72.0, 72.0), resolutionunit="INCH")  # a display resolution
+    assert image_pixel_size(inch) is None
+
+
+def test_image_pixel_size_none_without_calibration(tmp_path):
+    assert image_pixel_size(_image(tmp_path / "plain.tif")) is None
+    assert image_pixel_size(_image(tmp_path / "ij.tif", imagej=True)) is None
+    Image.fromarray(np.zeros((4, 4), np.uint8)).save(tmp_path / "a.png")
+    assert image_pixel_size(tmp_path / "a.png") is None
+    (tmp_path / "bad.tif").write_bytes(b"not a tiff")
+    assert image_pixel_size(tmp_path / "bad.tif") is None
+    assert image_pixel_size(tmp_path / "missing.tif") is None
