@@ -99,6 +99,16 @@ def test_prune_check_tool_compares_the_pruned_lcpdf(capsys, tool):
     assert "nearest 9999: TV 0.000 (99 %: 0.000), same level 100.0%" in out  # more than the sites: the exact sum
 
 
+def test_prune_check_pca_with_every_axis_finds_the_nearest_sites(capsys, tool):
+    # all 24 axes of a 5x5 window: the projected distance is the distance (fall-off weights
+    # included), so its nearest 16 give the exact sum's; one axis does not
+    tool("prune_check").main(["--names", "gravel", "--shape", "16", "--voxels", "60", "--counts", "16",
+                              "--pca", "1", "24", "--set", "neighborhood=5", "--set", "scales=2"])
+    out = capsys.readouterr().out
+    assert "view 1, PCA 24, nearest   16: TV 0.000 (99 %: 0.000), same level 100.0%" in out
+    assert "view 1, PCA  1, nearest   16: TV 0.000" not in out and "view 1, nearest   16: TV 0.000" in out
+
+
 def test_prune_error_reports_every_sweep(capsys, device, tool):
     tool("prune_error").main(["--names", "porous50", "--shape", "12", "--sample", "20", "--set", "scales=2",
                               "--device", device.device.name.strip()[:8]])

@@ -14,6 +14,11 @@ exact likelihood, and at what candidate count.
 
     python tools/prune_check.py                        # porous50, brick, gravel: 48^3, 2000 voxels
     python tools/prune_check.py --names hrtem --counts 16 64 256 1024
+    python tools/prune_check.py --names gravel hrtem grass --counts 16 64 --pca 16 24   # found by PCA
+
+``--pca D`` finds each K sites by a cheaper distance instead: between the windows' projections
+on the exemplar windows' first D principal axes (D multiply-adds a site instead of one per
+window term), then sums their exact terms, as a pruned likelihood with such candidates would.
 """
 
 from __future__ import annotations
@@ -27,17 +32,45 @@ import clsolid
 from clsolid.gallery import gallery_exemplar
 from clsolid.ml.model import build_scale
 from clsolid.ml.params import MLParams
-from clsolid.ml.reference import normalise, parzen, wrapped_coords
+from clsolid.ml.reference import normalise, parzen, site_distances, wrapped_coords
 
 
 def site_terms(model, vol: np.ndarray, voxels: np.ndarray, view: int, temperature: float) -> np.ndarray:
-    """``(m, n)``: each voxel's squared neighbourhood distance to every site, every neighbour
-    at *temperature* (its difference weighted by 1 - t, as the engine does)."""
-    nb = wrapped_coords(voxels, model.shape, model.offsets[view])
-    x = vol.ravel()[nb].astype(np.float64)  # (m, R)
-    p = model.patches  # (R, n)
-    a = (x**2).sum(axis=1)[:, None] - 2.0 * x @ p + (p**2).sum(axis=0)[None, :]
-    return (1.0 - temperature) ** 2 * np.maximum(a, 0.0)
+    """``(m, n)``: each voxel's neighbourhood distance to every site, as the engine's reference
+    computes it (fall-off and phase costs included), every neighbour at *temperature*."""
+    return site_distances(model, vol, np.full(vol.shape, temperature), voxels, view)
+
+
+class ProjectedSearch:
+    """The sites nearest to a voxel by the distance between the windows' projections on the
+    exemplar windows' first principal axes (each term scaled as the distance weighs it)."""
+
+    def __init__(self, model, temperature: float, dims: int) -> None:
+        if model.mismatch:
+            raise SystemExit("--pca needs squared differences (a grey exemplar, or --set distance='\"squared\"')")
+        w = np.full(model.patches.shape[0], 1.0 - temperature)
+        if model.term_weight is not None:
+            w = w * np.sqrt(model.term_weight)
+        self.model, self.scale = model, w
+        sites = model.patches.T * w  # (n, R)
+        self.mean = sites.mean(axis=0)
+        self.axes = np.linalg.svd(sites - self.mean, full_matrices=False)[2][:dims].T  # (R, dims)
+        self.sites = (sites - self.mean) @ self.axes
+
+    def nearest(self, vol: np.ndarray, voxels: np.ndarray, view: int, k: int) -> np.ndarray:
+        """``(m, n)`` True on each voxel's *k* sites nearest by the projected distance."""
+        x = vol.ravel()[wrapped_coords(voxels, self.model.shape, self.model.offsets[view])] * self.scale
+        q = (x - self.mean) @ self.axes
+        d = (q**2).sum(axis=1)[:, None] - 2.0 * q @ self.sites.T + (self.sites**2).sum(axis=1)[None, :]
+        return _smallest(d, k)
+
+
+def _smallest(a: np.ndarray, k: int) -> np.ndarray:
+    """``a.shape`` mask, True on the *k* smallest of each row (all of a row if k is larger)."""
+    keep = np.zeros(a.shape, bool)
+    k = min(k, a.shape[1])
+    np.put_along_axis(keep, np.argpartition(a, k - 1, axis=1)[:, :k], True, axis=1)
+    return keep
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -53,6 +86,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--temperature", type=float, default=0.0,
                     help="every neighbour's temperature t (weight 1 - t; default 0, a finished block; "
                          "a scale starts near 1)")
+    ap.add_argument("--pca", type=int, nargs="+", default=[], metavar="DIMS",
+                    help="also keep the K sites nearest by the distance projected on the exemplar windows' first "
+                         "DIMS principal axes (the exact terms of those sites), for each DIMS")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="a synthesize option, the value as JSON (repeatable), e.g. bandwidth_factor=1")
     args = ap.parse_args(argv)
@@ -69,24 +105,26 @@ def main(argv: list[str] | None = None) -> None:
         if args.block == "noise":
             vol = np.random.default_rng(1).choice(res.exemplar_labels.ravel(), vol.shape).astype(np.float64)
         n = model.n_sites
+        searches = {dims: ProjectedSearch(model, args.temperature, dims) for dims in args.pca}
         voxels = np.random.default_rng(0).choice(vol.size, min(args.voxels, vol.size), replace=False)
         lines = []
         for view in range(model.offsets.shape[0]):
-            tv = {k: [] for k in args.counts}
-            same = {k: [] for k in args.counts}
+            tv = {(k, dims): [] for dims in (None, *args.pca) for k in args.counts}
+            same = {key: [] for key in tv}
             for part in np.array_split(voxels, max(1, voxels.size // 200)):  # (200, labels, sites) at a time
                 a = site_terms(model, vol, part, view, args.temperature)
                 p_exact = np.exp(normalise(parzen(model, a)))
-                for k in args.counts:
-                    keep = np.zeros_like(a, bool)
-                    np.put_along_axis(keep, np.argpartition(a, min(k, n - 1), axis=1)[:, :k], True, axis=1)
-                    p = np.exp(normalise(parzen(model, a, keep)))
-                    tv[k].append(0.5 * np.abs(p - p_exact).sum(axis=1))
-                    same[k].append(p.argmax(1) == p_exact.argmax(1))
-            for k in args.counts:
-                t = np.concatenate(tv[k])
-                lines.append(f"  view {view}, nearest {k:>4}: TV {t.mean():.3f} (99 %: {np.quantile(t, 0.99):.3f}), "
-                             f"same level {np.mean(np.concatenate(same[k])):.1%}")
+                for key in tv:
+                    k, dims = key
+                    keep = _smallest(a, k) if dims is None else searches[dims].nearest(vol, part, view, k)
+                    p = np.exp(normalise(parzen(model, a, keep)))  # the exact terms of the sites kept
+                    tv[key].append(0.5 * np.abs(p - p_exact).sum(axis=1))
+                    same[key].append(p.argmax(1) == p_exact.argmax(1))
+            for (k, dims), t in tv.items():
+                t = np.concatenate(t)
+                how = "nearest" if dims is None else f"PCA {dims:>2}, nearest"
+                lines.append(f"  view {view}, {how} {k:>4}: TV {t.mean():.3f} (99 %: {np.quantile(t, 0.99):.3f}), "
+                             f"same level {np.mean(np.concatenate(same[(k, dims)])):.1%}")
         print(f"{name} ({n} sites, bandwidth {model.bandwidth:.3g}):")
         print("\n".join(lines), flush=True)
 
