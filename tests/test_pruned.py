@@ -241,3 +241,29 @@ def test_auto_prunes_categorical_exemplars_only(device, name, levels, want):
     forced = clsolid.synthesize(image, (8, 8, 8), levels=levels, scales=1, neighborhood=3, rng=1, device=device,
                                 likelihood="exact" if want == "pruned" else "pruned", full_output=True)
     assert forced.params["likelihood"] != want
+
+
+def test_projected_windows_with_every_axis_find_the_exact_nearest_sites():
+    """All the axes keep every distance (the fall-off's scaling included): the projected
+    nearest sites are the exact distance's at t = 0; one axis keeps less."""
+    labels = np.random.default_rng(4).integers(0, 8, (14, 15))
+    _, model = _model(labels, neighborhood=5, falloff=2.0)
+    assert model.term_weight is not None
+    vol, _, _ = _state(model)
+    voxels = np.arange(0, vol.size, 7)
+    exact = site_distances(model, vol, np.zeros(model.shape), voxels, 1)
+    want = pruned.smallest(exact, 6)
+    assert np.array_equal(pruned.ProjectedWindows.of(model, 24).nearest(model, vol, voxels, 1, 6), want)
+    assert not np.array_equal(pruned.ProjectedWindows.of(model, 1).nearest(model, vol, voxels, 1, 6), want)
+
+
+def test_projected_windows_refuse_mismatch_distances():
+    _, model = _model(np.random.default_rng(0).integers(0, 3, (14, 15)), neighborhood=5, distance="weighted")
+    with pytest.raises(ValueError, match="squared differences"):
+        pruned.ProjectedWindows.of(model, 4)
+
+
+def test_smallest_keeps_k_per_row_and_whole_rows_when_k_is_larger():
+    a = np.array([[3.0, 1.0, 2.0], [0.0, 5.0, 4.0]])
+    assert np.array_equal(pruned.smallest(a, 2), [[False, True, True], [True, False, True]])
+    assert pruned.smallest(a, 9).all()

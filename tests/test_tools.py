@@ -116,6 +116,15 @@ def test_prune_error_reports_every_sweep(capsys, device, tool):
     assert "porous50:" in out and "pruned" in out and "scale 0 sweep 1:" in out
 
 
+def test_prune_error_measures_projected_candidates(capsys, device, tool):
+    # more candidates than sites: the projected set is every site, so the exact sum
+    tool("prune_error").main(["--names", "gravel", "--shape", "12", "--sample", "20", "--set", "scales=2",
+                              "--set", "neighborhood=5", "--pca", "4", "99999",
+                              "--device", device.device.name.strip()[:8]])
+    out = capsys.readouterr().out
+    assert "gravel:" in out and "PCA: TV 0.0000 (99 %: 0.000), same mode 100.0%" in out
+
+
 def test_bench_scale_prints_a_row_per_run(capsys, device, tool):
     tool("bench_scale").main(["--cases", "64:8", "--names", "porous50", "--tile", "5", "--device",
                               device.device.name.strip()[:8]])

@@ -32,45 +32,14 @@ import clsolid
 from clsolid.gallery import gallery_exemplar
 from clsolid.ml.model import build_scale
 from clsolid.ml.params import MLParams
-from clsolid.ml.reference import normalise, parzen, site_distances, wrapped_coords
+from clsolid.ml.pruned import ProjectedWindows, smallest
+from clsolid.ml.reference import normalise, parzen, site_distances
 
 
 def site_terms(model, vol: np.ndarray, voxels: np.ndarray, view: int, temperature: float) -> np.ndarray:
     """``(m, n)``: each voxel's neighbourhood distance to every site, as the engine's reference
     computes it (fall-off and phase costs included), every neighbour at *temperature*."""
     return site_distances(model, vol, np.full(vol.shape, temperature), voxels, view)
-
-
-class ProjectedSearch:
-    """The sites nearest to a voxel by the distance between the windows' projections on the
-    exemplar windows' first principal axes (each term scaled as the distance weighs it)."""
-
-    def __init__(self, model, temperature: float, dims: int) -> None:
-        if model.mismatch:
-            raise SystemExit("--pca needs squared differences (a grey exemplar, or --set distance='\"squared\"')")
-        w = np.full(model.patches.shape[0], 1.0 - temperature)
-        if model.term_weight is not None:
-            w = w * np.sqrt(model.term_weight)
-        self.model, self.scale = model, w
-        sites = model.patches.T * w  # (n, R)
-        self.mean = sites.mean(axis=0)
-        self.axes = np.linalg.svd(sites - self.mean, full_matrices=False)[2][:dims].T  # (R, dims)
-        self.sites = (sites - self.mean) @ self.axes
-
-    def nearest(self, vol: np.ndarray, voxels: np.ndarray, view: int, k: int) -> np.ndarray:
-        """``(m, n)`` True on each voxel's *k* sites nearest by the projected distance."""
-        x = vol.ravel()[wrapped_coords(voxels, self.model.shape, self.model.offsets[view])] * self.scale
-        q = (x - self.mean) @ self.axes
-        d = (q**2).sum(axis=1)[:, None] - 2.0 * q @ self.sites.T + (self.sites**2).sum(axis=1)[None, :]
-        return _smallest(d, k)
-
-
-def _smallest(a: np.ndarray, k: int) -> np.ndarray:
-    """``a.shape`` mask, True on the *k* smallest of each row (all of a row if k is larger)."""
-    keep = np.zeros(a.shape, bool)
-    k = min(k, a.shape[1])
-    np.put_along_axis(keep, np.argpartition(a, k - 1, axis=1)[:, :k], True, axis=1)
-    return keep
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -105,7 +74,9 @@ def main(argv: list[str] | None = None) -> None:
         if args.block == "noise":
             vol = np.random.default_rng(1).choice(res.exemplar_labels.ravel(), vol.shape).astype(np.float64)
         n = model.n_sites
-        searches = {dims: ProjectedSearch(model, args.temperature, dims) for dims in args.pca}
+        if args.pca and model.mismatch:
+            raise SystemExit(f"--pca needs squared differences: {name} is compared by mismatches")
+        searches = {dims: ProjectedWindows.of(model, dims) for dims in args.pca}
         voxels = np.random.default_rng(0).choice(vol.size, min(args.voxels, vol.size), replace=False)
         lines = []
         for view in range(model.offsets.shape[0]):
@@ -116,7 +87,7 @@ def main(argv: list[str] | None = None) -> None:
                 p_exact = np.exp(normalise(parzen(model, a)))
                 for key in tv:
                     k, dims = key
-                    keep = _smallest(a, k) if dims is None else searches[dims].nearest(vol, part, view, k)
+                    keep = smallest(a, k) if dims is None else searches[dims].nearest(model, vol, part, view, k)
                     p = np.exp(normalise(parzen(model, a, keep)))  # the exact terms of the sites kept
                     tv[key].append(0.5 * np.abs(p - p_exact).sum(axis=1))
                     same[key].append(p.argmax(1) == p_exact.argmax(1))

@@ -11,6 +11,10 @@ on labels the exact one gives at least 1 %, and how often the most probable labe
 
     python tools/prune_error.py                         # porous50, composite3, gravel, brick at 48^3
     python tools/prune_error.py --names hrtem --shape 32 --set prune_similar=4
+    python tools/prune_error.py --names hrtem gravel --pca 24 64     # and K = 64 candidates found by PCA
+
+The run takes the parameters ``synthesize`` would (``MLParams.for_exemplar``: the fall-off on
+grey exemplars, the mismatch distances on categorical ones), with the pruned sum everywhere.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ import time
 import numpy as np
 
 from clsolid.core.device import select_device
+from clsolid.core.slices import seam_ratio
 from clsolid.exemplar import builtin_exemplar, level_map
 from clsolid.gallery import gallery_exemplar
 from clsolid.ml import pruned
@@ -35,14 +40,15 @@ from clsolid.ml.reference import normalise, parzen, site_distances
 class _Probe(CLBackend):
     """A back end that measures a sample of the first set of each sweep before relaxing it."""
 
-    def __init__(self, device, sample: int):
+    def __init__(self, device, sample: int, pca: tuple[int, int] | None = None):
         super().__init__(device)
-        self.sample, self.rows, self.rng = sample, [], np.random.default_rng(0)
+        self.sample, self.rows, self.rng, self.pca = sample, [], np.random.default_rng(0), pca
 
     def start_scale(self, model: ScaleModel, vol, temp, params, sources=None) -> None:
         self.sweep, self.tag = -1, None  # start_scale's own start_sweep is not a sweep
         super().start_scale(model, vol, temp, params, sources)
         self.pruning = pruned.Pruning(model, params)
+        self.projected = None if self.pca is None else pruned.ProjectedWindows.of(model, self.pca[0])
 
     def start_sweep(self, seed, tag, t_in, bias) -> None:
         super().start_sweep(seed, tag, t_in, bias)
@@ -67,16 +73,21 @@ class _Probe(CLBackend):
         row = {"level": m.level, "sweep": self.sweep, "measured": int(part.size)}
         if part.size == 0:
             return row
-        exact, cut = [], []
+        exact, cut, projected = [], [], []
         for v in range(m.offsets.shape[0]):
             a = site_distances(m, vol, temp, part, v)
             keep = self.pruning.weights(src, self.seed, self.tag, part, v)
             exact.append(normalise(parzen(m, a)))
             cut.append(normalise(parzen(m, a, keep)))
+            if self.projected is not None:  # the exact terms of the K sites nearest by projection
+                projected.append(normalise(parzen(m, a, self.projected.nearest(m, vol, part, v, self.pca[1]))))
         pe, pc = (np.exp(normalise(np.sum(x, axis=0))) for x in (exact, cut))
-        log_err = np.abs(np.log(np.maximum(pc, 1e-300)) - np.log(pe))
+        log_err = np.abs(np.log(np.maximum(pc, 1e-300)) - np.log(np.maximum(pe, 1e-300)))  # read where pe >= 0.01
         row.update(tv=0.5 * np.abs(pc - pe).sum(axis=1), log_err=np.where(pe >= 0.01, log_err, 0).max(axis=1),
                    same=pc.argmax(1) == pe.argmax(1))
+        if projected:
+            pp = np.exp(normalise(np.sum(projected, axis=0)))
+            row.update(tv_pca=0.5 * np.abs(pp - pe).sum(axis=1), same_pca=pp.argmax(1) == pe.argmax(1))
         return row
 
 
@@ -88,6 +99,10 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--device", default=None)
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="an MLParams field, the value as JSON (repeatable), e.g. prune_similar=4")
+    ap.add_argument("--pca", type=int, nargs=2, default=None, metavar=("DIMS", "K"),
+                    help="also measure the exact terms of the K sites nearest by the distance projected on the "
+                         "exemplar windows' first DIMS principal axes (grey exemplars; clsolid.ml.pruned."
+                         "ProjectedWindows)")
     args = ap.parse_args(argv)
     options = {k: json.loads(v) for k, v in (s.split("=", 1) for s in args.set)}
     params = MLParams(**{"likelihood": "pruned", **options})
@@ -96,9 +111,11 @@ def main(argv: list[str] | None = None) -> None:
           f"prune_min_weight={params.prune_min_weight}; {device.name}")
     for name in args.names:
         image = builtin_exemplar(name) if name in ("brick", "grass", "gravel") else gallery_exemplar(name, 64)
-        probe = _Probe(device, args.sample)
+        probe = _Probe(device, args.sample, None if args.pca is None else tuple(args.pca))
+        levels = level_map(image, params.levels)
+        run_params = params.for_exemplar(levels.values.size, levels.exact, seam_ratio(image))  # as synthesize
         t = time.perf_counter()
-        run_ml(level_map(image, params.levels).labels, (args.shape,) * 3, params, 1, probe)
+        run_ml(levels.labels, (args.shape,) * 3, run_params, 1, probe)
         print(f"{name}: {time.perf_counter() - t:.1f} s (with the measuring), visits: "
               f"{probe.pruned_visits / max(1, probe.pruned_visits + probe.exact_visits):.0%} pruned")
         for r in probe.rows:
@@ -107,7 +124,9 @@ def main(argv: list[str] | None = None) -> None:
                 continue
             print(f"  scale {r['level']} sweep {r['sweep']}: {r['measured']:>3} pruned voxels, TV {r['tv'].mean():.4f} "
                   f"(99 %: {np.quantile(r['tv'], 0.99):.3f}), log error {r['log_err'].mean():.4f} "
-                  f"(max {r['log_err'].max():.3f}), same mode {r['same'].mean():.1%}", flush=True)
+                  f"(max {r['log_err'].max():.3f}), same mode {r['same'].mean():.1%}"
+                  + (f"; PCA: TV {r['tv_pca'].mean():.4f} (99 %: {np.quantile(r['tv_pca'], 0.99):.3f}), "
+                     f"same mode {r['same_pca'].mean():.1%}" if "tv_pca" in r else ""), flush=True)
         tv = np.concatenate([r["tv"] for r in probe.rows if r["measured"]] or [np.zeros(0)])
         if tv.size:
             print(f"  all sweeps: TV {tv.mean():.4f} (99 %: {np.quantile(tv, 0.99):.3f}) over {tv.size} voxels")

@@ -249,3 +249,45 @@ class Pruning:
         nb = wrapped_coords(voxels, m.shape, self.voxel_offsets[view])
         sampled = sample_sites(seed, tag, voxels, m.shape, view, m.n_sites, self.params.prune_sample)
         return term_weights(self.table, src[view][nb], self.exemplar_offsets[view], sampled)
+
+
+@dataclass
+class ProjectedWindows:
+    """The exemplar's windows projected on their first principal axes: a cheaper distance
+    to find a voxel's nearest sites by (squared differences only; measured, not yet a mode:
+    ``tools/prune_check.py --pca``, ``tools/prune_error.py --pca``).
+
+    Each term is scaled as the window distance weighs it at t = 0 (the fall-off's weight);
+    the neighbours' temperatures are left out of the search, which finds candidates whose
+    exact terms, temperatures included, are then summed."""
+
+    scale: np.ndarray  # (R,) each term's scale, the square root of its fall-off weight
+    mean: np.ndarray  # (R,) the mean scaled window
+    axes: np.ndarray  # (R, dims) the first principal axes
+    sites: np.ndarray  # (n, dims) every site's projection
+
+    @classmethod
+    def of(cls, model: ScaleModel, dims: int) -> "ProjectedWindows":
+        """The first *dims* axes of *model*'s windows (all of them if it has fewer terms)."""
+        if model.mismatch:
+            raise ValueError("projected windows need squared differences (a grey exemplar)")
+        scale = np.ones(model.patches.shape[0]) if model.term_weight is None else np.sqrt(model.term_weight)
+        windows = model.patches.T * scale
+        mean = windows.mean(axis=0)
+        axes = np.linalg.svd(windows - mean, full_matrices=False)[2][:dims].T
+        return cls(scale, mean, axes, (windows - mean) @ axes)
+
+    def nearest(self, model: ScaleModel, vol: np.ndarray, voxels: np.ndarray, view: int, k: int) -> np.ndarray:
+        """``(m, n)`` True on each voxel's *k* sites nearest by the projected distance (ties: any)."""
+        x = vol.ravel()[wrapped_coords(voxels, model.shape, model.offsets[view])] * self.scale
+        q = (x - self.mean) @ self.axes
+        d = (q**2).sum(axis=1)[:, None] - 2.0 * q @ self.sites.T + (self.sites**2).sum(axis=1)[None, :]
+        return smallest(d, k)
+
+
+def smallest(a: np.ndarray, k: int) -> np.ndarray:
+    """``a.shape`` mask, True on the *k* smallest of each row (the whole row if k is larger)."""
+    keep = np.zeros(a.shape, bool)
+    k = min(k, a.shape[1])
+    np.put_along_axis(keep, np.argpartition(a, k - 1, axis=1)[:, :k], True, axis=1)
+    return keep
