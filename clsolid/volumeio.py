@@ -260,13 +260,16 @@ def _check_voxel_size(voxel_size: Any) -> tuple[float, float, float] | None:
 
 
 def _check_unit(unit: Any) -> str:
-    """The unit string must be short text that fits on one ImageJ header line."""
+    """The unit string must be short text that fits on one ImageJ header line. Returned as
+    ImageJ writes it: the header is ASCII, so a character beyond it (the micro sign of an
+    OME file's default unit, an angstrom) becomes ImageJ's escape ``\\uXXXX``, which ImageJ
+    shows as the character and tifffile returns as written."""
     if not isinstance(unit, str) or not unit.strip() or any(c in unit for c in "\r\n="):
         raise InputError(
             f"unit must be a non-empty string without line breaks or '=', got {unit!r}; "
             "pass e.g. unit='um' or unit='mm'"
         )
-    return unit
+    return "".join(c if ord(c) < 128 else f"\\u{ord(c):04X}" for c in unit)
 
 
 def _check_metadata(metadata: Any) -> str | None:

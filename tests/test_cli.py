@@ -195,3 +195,15 @@ def test_uncalibrated_exemplar_gives_no_voxel_size(tmp_path, device):
     _, info = load_volume(tmp_path / "v.tif")
     assert info["voxel_size"] is None
     assert json.loads((tmp_path / "v.json").read_text())["voxel_size_from"] is None
+
+
+def test_ome_exemplar_in_default_micrometres_is_written(tmp_path, device):
+    from clsolid.gallery import gallery_exemplar
+    import tifffile
+
+    ex = tmp_path / "ex.ome.tif"
+    tifffile.imwrite(ex, gallery_exemplar("porous50", 64)[:24, :24].astype(np.uint8), ome=True,
+                     metadata={"axes": "YX", "PhysicalSizeX": 0.2, "PhysicalSizeY": 0.2})
+    assert main(["synth", str(ex), "-o", str(tmp_path / "v.tif"), *FAST, "-q"]) == 0
+    _, info = load_volume(tmp_path / "v.tif")
+    assert info["voxel_size"] == pytest.approx((0.2, 0.2, 0.2)) and info["unit"] == "\\u00B5m"

@@ -319,3 +319,17 @@ def test_image_pixel_size_none_without_calibration(tmp_path):
     (tmp_path / "bad.tif").write_bytes(b"not a tiff")
     assert image_pixel_size(tmp_path / "bad.tif") is None
     assert image_pixel_size(tmp_path / "missing.tif") is None
+
+
+def test_non_ascii_unit_is_written_as_imagej_escape(tmp_path, labels):
+    # the ImageJ header is ASCII: the micro sign (an OME file's default unit) would not encode
+    out = save_volume(tmp_path / "v.tif", labels, voxel_size=0.5, unit="\u00b5m")
+    _, info = load_volume(out)
+    assert info["unit"] == "\\u00B5m" and info["voxel_size"] == pytest.approx((0.5, 0.5, 0.5))
+    with tifffile.TiffFile(out) as tif:
+        assert "unit=\\u00B5m" in tif.pages[0].description
+
+
+def test_ome_default_unit_is_micrometres(tmp_path):
+    path = _image(tmp_path / "o.ome.tif", ome=True, metadata={"axes": "YX", "PhysicalSizeX": 0.5})
+    assert image_pixel_size(path) == ((pytest.approx(0.5), pytest.approx(0.5)), "\u00b5m")
