@@ -406,7 +406,7 @@ def cmd_synth(args) -> int:
     from .api import resume, slice_plan, synthesize
     from .preview import save_preview, save_site_map
     from .core.slices import preview_depths
-    from .volumeio import save_volume
+    from .volumeio import check_calibration, save_volume
 
     suffix = args.output.suffix.lower()
     if suffix not in (".tif", ".tiff", ".npy"):
@@ -414,6 +414,7 @@ def cmd_synth(args) -> int:
     if args.preview is not None and args.preview.suffix.lower() != ".png":
         raise InputError(f"--preview {args.preview} must end in .png")
     voxel_size, unit, voxel_from = _voxel_size(args)
+    check_calibration(voxel_size, unit or "um")  # now, not after the run
     _check_method_flags(args)
     if args.resume is not None:
         _check_resume_flags(args)

@@ -272,6 +272,13 @@ def _check_unit(unit: Any) -> str:
     return "".join(c if ord(c) < 128 else f"\\u{ord(c):04X}" for c in unit)
 
 
+def check_calibration(voxel_size: Any, unit: Any) -> None:
+    """Raise :class:`~clsolid.errors.InputError` for a *voxel_size* or *unit* that
+    :func:`save_volume` would refuse, so that a run can fail before it starts, not after."""
+    _check_voxel_size(voxel_size)
+    _check_unit(unit)
+
+
 def _check_metadata(metadata: Any) -> str | None:
     """Serialise ``metadata`` to JSON, which is how it is stored in the TIFF."""
     if metadata is None:
