@@ -10,6 +10,7 @@ import argparse
 import contextlib
 import json
 import math
+import os
 import platform
 import sys
 import time
@@ -402,6 +403,39 @@ def _dask_client(args):
     return dask_client(args.scheduler, args.workers)
 
 
+def _outputs(args) -> list[tuple[str, Path]]:
+    """The files a ``synth`` run writes, with their flags."""
+    flags = (("--output", args.output), ("--preview", args.preview), ("--site-map", args.site_map),
+             ("--source-map", args.source_map), ("--track", args.track))
+    return [(flag, Path(path)) for flag, path in flags if path is not None]
+
+
+def _check_writable(args) -> None:
+    """Every file the run writes can be written: its folder exists or can be made and takes
+    files (a path is otherwise first met after the whole run, and the run is lost)."""
+    for flag, path in _outputs(args):
+        if path.is_dir():
+            raise InputError(f"{flag} {path} is a folder; give a file name")
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError(f"{flag} {path}: its folder cannot be made ({exc.strerror}); choose a writable "
+                             "folder") from exc
+        if not os.access(path.parent, os.W_OK):
+            raise InputError(f"{flag} {path}: the folder {path.parent} does not take new files; choose another")
+
+
+def _rescue(volume, seed: int) -> Path:
+    """Save a volume whose output failed late (a full disk) where it can go: the temporary folder."""
+    import tempfile
+
+    import numpy as np
+
+    path = Path(tempfile.gettempdir()) / f"clsolid-rescued-seed{seed}-{os.getpid()}.npy"
+    np.save(path, volume)
+    return path
+
+
 def cmd_synth(args) -> int:
     from .api import resume, slice_plan, synthesize
     from .preview import save_preview, save_site_map
@@ -415,6 +449,7 @@ def cmd_synth(args) -> int:
         raise InputError(f"--preview {args.preview} must end in .png")
     voxel_size, unit, voxel_from = _voxel_size(args)
     check_calibration(voxel_size, unit or "um")  # now, not after the run
+    _check_writable(args)
     _check_method_flags(args)
     if args.resume is not None:
         _check_resume_flags(args)
@@ -461,10 +496,14 @@ def cmd_synth(args) -> int:
                                 levels=args.levels, rng=args.seed, device=args.device, progress=report,
                                 full_output=True, **options)
     written_kind = "indices" if args.indices else "values"
-    written = save_volume(args.output, result.labels if args.indices else result.volume,
-                          voxel_size=voxel_size, unit=unit or "um",
-                          metadata={"seed": result.seed, "written": written_kind,
-                                    "levels": int(result.level_values.size)})
+    volume = result.labels if args.indices else result.volume
+    try:
+        written = save_volume(args.output, volume, voxel_size=voxel_size, unit=unit or "um",
+                              metadata={"seed": result.seed, "written": written_kind,
+                                        "levels": int(result.level_values.size)})
+    except OSError as exc:  # checked writable before the run: a full disk, a vanished mount
+        raise ClsolidError(f"--output {args.output} could not be written ({exc}); the volume is saved in "
+                           f"{_rescue(volume, result.seed)}") from exc
     sidecar = written.with_suffix(".json")
     meta = {"volume": str(written), "exemplar": str(args.exemplar) if args.resume is None else None,
             "resumed_from": None if args.resume is None else str(args.resume), "written": written_kind,
@@ -483,10 +522,8 @@ def cmd_synth(args) -> int:
     if args.source_map is not None:
         import numpy as np
 
-        args.source_map.parent.mkdir(parents=True, exist_ok=True)
         np.save(args.source_map, result.source)
     if args.track is not None:
-        args.track.parent.mkdir(parents=True, exist_ok=True)
         args.track.write_text(json.dumps({"exemplar": str(args.exemplar), "seed": result.seed,
                                           "records": records}, indent=2))
     if not args.quiet:

@@ -217,3 +217,37 @@ def test_bad_calibration_fails_before_the_run(tmp_path, capsys, flags, needle):
     assert main(["synth", "brick", "-o", str(tmp_path / "v.tif"), *FAST, *flags]) == EXIT_USAGE
     err = capsys.readouterr().err
     assert needle in err and "sweep" not in err  # refused before the first sweep, not after the run
+
+
+@pytest.mark.parametrize("flag", ["-o", "--preview", "--track"])
+def test_unwritable_output_fails_before_the_run(tmp_path, capsys, flag):
+    (tmp_path / "a_file").write_text("")
+    bad = tmp_path / "a_file" / ("p.png" if flag == "--preview" else "x.tif" if flag == "-o" else "t.json")
+    args = ["synth", "brick", "-o", str(tmp_path / "v.tif"), *FAST]
+    args = [str(bad) if a == str(tmp_path / "v.tif") and flag == "-o" else a for a in args]
+    if flag != "-o":
+        args += [flag, str(bad)]
+    assert main(args) == EXIT_USAGE
+    err = capsys.readouterr().err
+    assert "its folder cannot be made" in err and "sweep" not in err
+
+
+def test_output_that_is_a_folder_fails_before_the_run(tmp_path, capsys):
+    (tmp_path / "v.tif").mkdir()
+    assert main(["synth", "brick", "-o", str(tmp_path / "v.tif"), *FAST]) == EXIT_USAGE
+    assert "is a folder" in capsys.readouterr().err
+
+
+def test_volume_is_rescued_when_the_output_fails_late(tmp_path, capsys, monkeypatch, device):
+    import clsolid.volumeio
+
+    def full_disk(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(clsolid.volumeio, "save_volume", full_disk)
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    assert main(["synth", "brick", "-o", str(tmp_path / "v.tif"), *FAST, "-q", "--indices"]) == 1
+    err = capsys.readouterr().err
+    assert "No space left on device" in err and "the volume is saved in" in err
+    rescued = list(tmp_path.glob("clsolid-rescued-seed3-*.npy"))
+    assert len(rescued) == 1 and np.load(rescued[0]).shape == (8, 10, 12)
