@@ -411,18 +411,24 @@ def _outputs(args) -> list[tuple[str, Path]]:
 
 
 def _check_writable(args) -> None:
-    """Every file the run writes can be written: its folder exists or can be made and takes
-    files (a path is otherwise first met after the whole run, and the run is lost)."""
+    """Every file the run writes can be written: its folder (the ``--checkpoint`` folder
+    itself) exists or can be made and takes files (a path is otherwise first met after the
+    whole run, or the first sweep, and the run is lost)."""
+    folders = []
     for flag, path in _outputs(args):
         if path.is_dir():
             raise InputError(f"{flag} {path} is a folder; give a file name")
+        folders.append((flag, path, path.parent))
+    if getattr(args, "checkpoint", None) is not None:
+        folders.append(("--checkpoint", Path(args.checkpoint), Path(args.checkpoint)))
+    for flag, path, folder in folders:
         try:
-            path.parent.mkdir(parents=True, exist_ok=True)
+            folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise InputError(f"{flag} {path}: its folder cannot be made ({exc.strerror}); choose a writable "
                              "folder") from exc
-        if not os.access(path.parent, os.W_OK):
-            raise InputError(f"{flag} {path}: the folder {path.parent} does not take new files; choose another")
+        if not os.access(folder, os.W_OK):
+            raise InputError(f"{flag} {path}: the folder {folder} does not take new files; choose another")
 
 
 def _rescue(volume, seed: int) -> Path:
@@ -449,12 +455,12 @@ def cmd_synth(args) -> int:
         raise InputError(f"--preview {args.preview} must end in .png")
     voxel_size, unit, voxel_from = _voxel_size(args)
     check_calibration(voxel_size, unit or "um")  # now, not after the run
-    _check_writable(args)
     _check_method_flags(args)
     if args.resume is not None:
         _check_resume_flags(args)
     elif args.checkpoint is not None and args.method != "ml":
         raise InputError(f"--checkpoint is for --method ml; {args.method} runs are not checkpointed yet")
+    _check_writable(args)  # after the flags' checks, which make no folders
     if args.method != "ml":
         options = dict(iterations=args.iterations, inner=args.inner, parent=not args.no_parent,
                        parent_weight=args.parent_weight, distance=args.distance, init=args.init, rule=args.rule,

@@ -219,10 +219,10 @@ def test_bad_calibration_fails_before_the_run(tmp_path, capsys, flags, needle):
     assert needle in err and "sweep" not in err  # refused before the first sweep, not after the run
 
 
-@pytest.mark.parametrize("flag", ["-o", "--preview", "--track"])
+@pytest.mark.parametrize("flag", ["-o", "--preview", "--track", "--checkpoint"])
 def test_unwritable_output_fails_before_the_run(tmp_path, capsys, flag):
     (tmp_path / "a_file").write_text("")
-    bad = tmp_path / "a_file" / ("p.png" if flag == "--preview" else "x.tif" if flag == "-o" else "t.json")
+    bad = tmp_path / "a_file" / {"--preview": "p.png", "-o": "x.tif", "--track": "t.json"}.get(flag, "ck")
     args = ["synth", "brick", "-o", str(tmp_path / "v.tif"), *FAST]
     args = [str(bad) if a == str(tmp_path / "v.tif") and flag == "-o" else a for a in args]
     if flag != "-o":
