@@ -34,7 +34,8 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
                "insert_spacing", "insert_piece", "seam_gap",
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
-               "prune_similar", "prune_sample", "prune_min_weight", "falloff")
+               "prune_similar", "prune_sample", "prune_min_weight", "prune_projected",
+               "prune_projected_k", "falloff")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
 _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
@@ -307,7 +308,10 @@ def synthesize(
         sites at the last visit, of the voxel and its 8 in-slice neighbours, shifted, and the
         ``prune_similar`` (8) windows most like each; identical windows count by their
         number), plus an unbiased estimate of the rest from ``prune_sample`` (64) sites
-        drawn systematically; a neighbourhood whose mean (1 - t)^2 is below
+        drawn systematically; with ``prune_projected=D`` (0: off) also each voxel's
+        ``prune_projected_k`` (64) sites nearest by the distance projected on the exemplar
+        windows' first D principal axes (squared differences only; README, Performance);
+        a neighbourhood whose mean (1 - t)^2 is below
         ``prune_min_weight`` (default 0: none) gets the exact sum (``clsolid.ml.pruned``).
         Accurate on categorical exemplars, approximate on grey ones (README, Performance), so
         ``"auto"`` (default) prunes categorical exemplars (binary or segmented: their own

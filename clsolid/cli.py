@@ -169,6 +169,11 @@ def _add_synth(sub) -> None:
                    help="pruned: windows taken per source, itself included (default %(default)s)")
     p.add_argument("--prune-sample", type=int, default=d.prune_sample,
                    help="pruned: sites sampled to estimate the rest of the sum (default %(default)s)")
+    p.add_argument("--prune-projected", type=int, default=d.prune_projected, metavar="AXES",
+                   help="pruned, grey exemplars: also take each voxel's nearest sites by the distance projected "
+                        "on the exemplar windows' first AXES principal axes (default %(default)s: off; 24 measured)")
+    p.add_argument("--prune-projected-k", type=int, default=d.prune_projected_k, metavar="K",
+                   help="pruned: the projected candidates a voxel and view takes (default %(default)s)")
     p.add_argument("--prune-min-weight", type=float, default=d.prune_min_weight,
                    help="pruned: a neighbourhood whose mean (1 - t)^2 is below this gets the exact sum "
                         "(default %(default)s: never)")
@@ -310,7 +315,8 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "insert_slices", "insert_spacing", "insert_piece", "seam_gap", "slice_layout", "initial_temperature",
             "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
-            "prune_similar", "prune_sample", "prune_min_weight", "falloff", "tile", "scheduler", "workers", "indices",
+            "prune_similar", "prune_sample", "prune_min_weight", "prune_projected", "prune_projected_k", "falloff",
+            "tile", "scheduler", "workers", "indices",
             "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "parent_weight", "init", "rule", "order", "causal", "histogram",
             "candidates", "specify", "search", "exact_passes", "site_map", "source_map")
@@ -379,7 +385,8 @@ def _ml_options(args) -> dict:
                    relaxation=args.relaxation, anneal_start=args.anneal_start, anneal_cooling=args.anneal_cooling,
                    sweeps=args.sweeps, balance=args.balance, likelihood=args.likelihood,
                    distance=args.distance, prune_similar=args.prune_similar, prune_sample=args.prune_sample,
-                   prune_min_weight=args.prune_min_weight, falloff=args.falloff)
+                   prune_min_weight=args.prune_min_weight, prune_projected=args.prune_projected,
+                   prune_projected_k=args.prune_projected_k, falloff=args.falloff)
     if args.tile is not None:
         options["tile"] = args.tile
     for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale

@@ -78,14 +78,19 @@ def test_exact_kernel_records_the_nearest_site(device, small_labels):
     assert (cl_b.sources()[:, voxels] == ref.sources()[:, voxels]).mean() > 0.98
 
 
-@pytest.mark.parametrize("k, views, similar, sample, distance, falloff",
-                         [(3, 2, 1, 0, "squared", 0), (5, 3, 8, 0, "squared", 0), (7, 2, 16, 0, "squared", 0),
-                          (5, 2, 8, 64, "squared", 0), (7, 3, 4, 17, "squared", 0), (5, 3, 8, 0, "mismatch", 0),
-                          (7, 2, 4, 17, "mismatch", 0), (5, 2, 8, 17, "weighted", 0), (7, 2, 8, 17, "squared", 2.0),
-                          (5, 3, 4, 0, "weighted", 1.0)])
-def test_pruned_lcpdf_matches_reference(device, small_labels, k, views, similar, sample, distance, falloff):
+@pytest.mark.parametrize("k, views, similar, sample, distance, falloff, projected",
+                         [(3, 2, 1, 0, "squared", 0, 0), (5, 3, 8, 0, "squared", 0, 0), (7, 2, 16, 0, "squared", 0, 0),
+                          (5, 2, 8, 64, "squared", 0, 0), (7, 3, 4, 17, "squared", 0, 0),
+                          (5, 3, 8, 0, "mismatch", 0, 0), (7, 2, 4, 17, "mismatch", 0, 0),
+                          (5, 2, 8, 17, "weighted", 0, 0), (7, 2, 8, 17, "squared", 2.0, 0),
+                          (5, 3, 4, 0, "weighted", 1.0, 0),
+                          # projected candidates (8 axes, 20 a voxel): with and without a sample and fall-off
+                          (5, 2, 4, 0, "squared", 0, 8), (7, 3, 8, 17, "squared", 2.0, 8)])
+def test_pruned_lcpdf_matches_reference(device, small_labels, k, views, similar, sample, distance, falloff,
+                                        projected):
     params, model = _model(small_labels, neighborhood=k, views=views, likelihood="pruned", prune_similar=similar,
-                           prune_sample=sample, distance=distance, falloff=falloff)
+                           prune_sample=sample, distance=distance, falloff=falloff, prune_projected=projected,
+                           prune_projected_k=20)
     vol, temp, sources = _state(model, seed=k)
     cl_b, ref = _backends(device, model, params, vol, temp, sources)
     voxels = np.flatnonzero(model.colour.ravel() == 0)
@@ -223,7 +228,8 @@ def test_pruned_run_resumes_identically(tmp_path, device, name):
 
 @pytest.mark.parametrize("bad", [dict(likelihood="fast"), dict(prune_similar=0), dict(prune_similar=17),
                                  dict(prune_min_weight=1.5), dict(prune_min_weight="x"), dict(prune_sample=-1),
-                                 dict(prune_sample=5000)])
+                                 dict(prune_sample=5000), dict(prune_projected=-1), dict(prune_projected=65),
+                                 dict(prune_projected_k=0), dict(prune_projected=True)])
 def test_bad_pruned_parameters_are_refused(bad):
     with pytest.raises(InputError, match=next(iter(bad))):
         MLParams(**bad)
@@ -267,3 +273,40 @@ def test_smallest_keeps_k_per_row_and_whole_rows_when_k_is_larger():
     a = np.array([[3.0, 1.0, 2.0], [0.0, 5.0, 4.0]])
     assert np.array_equal(pruned.smallest(a, 2), [[False, True, True], [True, False, True]])
     assert pruned.smallest(a, 9).all()
+
+
+def test_projected_candidates_are_the_references(device, small_labels):
+    """The kernel's projected nearest windows (top K by the projected distance, lower site
+    first on a tie) are the float64 reference's, item by item."""
+    params, model = _model(small_labels, neighborhood=5, likelihood="pruned", falloff=2.0, prune_projected=6,
+                           prune_projected_k=12)
+    vol, temp, sources = _state(model, seed=2)
+    cl_b, ref = _backends(device, model, params, vol, temp, sources)
+    voxels = np.flatnonzero(model.colour.ravel() == 1).astype(np.int32)
+    cl_b.lcpdf(voxels)  # a visit computes them for every (voxel, view) item
+    got = np.empty(voxels.size * 2 * 12, np.int32)
+    import pyopencl as cl
+
+    cl.enqueue_copy(device.queue, got, cl_b.projected_out)
+    got = got.reshape(voxels.size, 2, 12)
+    want = np.stack([ref.pruning.projected_windows(ref.vol, voxels, v) for v in range(2)], axis=1)
+    assert (np.sort(got, axis=2) == np.sort(want, axis=2)).all(axis=2).mean() > 0.98  # float32 near-ties aside
+    assert (got >= 0).all()
+
+
+def test_projected_candidates_need_squared_differences(small_labels):
+    params = MLParams(scales=1, neighborhood=5, likelihood="pruned", distance="mismatch", prune_projected=4)
+    with pytest.raises(InputError, match="squared differences"):
+        pruned.Pruning(build_scale(small_labels, SHAPE, params, 0), params)
+
+
+def test_projected_candidates_run_is_reproducible_and_tiles_alike(device):
+    from clsolid.gallery import gallery_exemplar
+
+    ex = gallery_exemplar("gravel", 64)[:40, :40]
+    kw = dict(rng=1, likelihood="pruned", prune_projected=8, prune_projected_k=16, neighborhood=5, scales=2,
+              device=device.device.name.strip()[:8])
+    one = clsolid.synthesize(ex, (12, 12, 12), **kw)
+    assert np.array_equal(one, clsolid.synthesize(ex, (12, 12, 12), **kw))
+    assert np.array_equal(one, clsolid.synthesize(ex, (12, 12, 12), tile=7, **kw))
+    assert not np.array_equal(one, clsolid.synthesize(ex, (12, 12, 12), **{**kw, "prune_projected": 0}))

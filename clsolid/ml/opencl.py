@@ -138,6 +138,8 @@ class CLBackend:
         return programs.build(self.device, "ml/likelihood.cl", {
             "NR": nr, "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
             "NS": self.params.prune_similar if self.params.likelihood == "pruned" else 1,
+            **({"PROJ_K": _projected_k(self.params), "PROJ_D": min(self.params.prune_projected, nr, model.n_sites)}
+               if _projected_k(self.params) else {}),
             "MISMATCH": 2 if model.costs is not None else int(model.mismatch),
             **({"COSTS": _float_literals(model.costs)} if model.costs is not None else {}),
             **({"FALLOFF": _float_literals(np.sqrt(model.term_weight))} if model.term_weight is not None else {}),
@@ -276,6 +278,13 @@ class CLBackend:
                         self._buf(np.log(table.count).astype(np.float32)), self._buf(table.source),
                         np.int32(table.grid[0]), np.int32(table.grid[1]))
         self.flags_buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, batch * _F4)
+        proj, views = pruning.projected, model.offsets.shape[0]
+        k = _projected_k(pruning.params)
+        self.projected_out = cl.Buffer(self.device.context, cl.mem_flags.READ_WRITE, max(1, batch * views * k) * _F4)
+        self.projection = None if proj is None else (
+            self._buf(proj.scale.astype(np.float32)), self._buf(proj.mean.astype(np.float32)),
+            self._buf(_float8_rows(proj.axes)), self._buf(_float8_rows(proj.sites)),
+            np.int32(model.n_sites), self.windows[0])
 
     def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
         """Random stream (Philox key *seed*, counter tag *tag*), global temperature *t_in*
@@ -319,11 +328,17 @@ class CLBackend:
             self.exact_visits += n_exact
             self.pruned_visits += voxels.size - n_exact
         if n_exact < voxels.size:
+            items = (self._global(n_items - n_exact * views, self.item_local),)
+            if self.projection is not None:
+                self.k["projected_nearest"](
+                    q, items, (self.item_local,), self.vol_buf, *self._shape_args(), self.vox_buf,
+                    np.int32(n_exact * views), np.int32(n_items), np.int32(views), self.offsets, *self.projection,
+                    self.projected_out)
             self.k["parzen_candidates"](
-                q, (self._global(n_items - n_exact * views, self.item_local),), (self.item_local,),
+                q, items, (self.item_local,),
                 self.vol_buf, self.temp_buf, *self._shape_args(), *self.placement, self.vox_buf,
                 np.int32(n_exact * views), np.int32(n_items), np.int32(views), self.offsets, *self.coherence,
-                self.src, np.int32(self.n_block), *self.windows,
+                self.src, np.int32(self.n_block), *self.windows, self.projected_out,
                 np.int32(min(self.params.prune_sample, m.n_sites)), *self.sample_key,
                 np.int32(self.n_groups), self.kfactor, self.sums)
         return n_items
@@ -459,3 +474,15 @@ class CLBackend:
                         np.int32(n_labels), self.kfactor, buf)
         cl.enqueue_copy(self.device.queue, out, buf)
         return out.reshape(voxels.size, -1, n_labels)[rows].transpose(1, 0, 2)
+
+
+def _float8_rows(a: np.ndarray) -> np.ndarray:
+    """*a* ``(n, d)`` as float32 rows of whole float8 vectors, zero-padded (a zero term adds nothing)."""
+    out = np.zeros((a.shape[0], -(-a.shape[1] // 8) * 8), np.float32)
+    out[:, : a.shape[1]] = a
+    return out
+
+
+def _projected_k(params: MLParams) -> int:
+    """The projected candidates an item takes: ``prune_projected_k`` with ``prune_projected``, else 0."""
+    return params.prune_projected_k if params.likelihood == "pruned" and params.prune_projected else 0

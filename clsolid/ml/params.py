@@ -141,6 +141,8 @@ class MLParams:
     prune_similar: int = 8
     prune_sample: int = 64
     prune_min_weight: float = 0.0
+    prune_projected: int = 0  # axes of the projected candidate search (0: off; clsolid.ml.pruned.ProjectedWindows)
+    prune_projected_k: int = 64  # its candidates a voxel and view
 
     def __post_init__(self):
         k = int_in("neighborhood", self.neighborhood, 3, 31)
@@ -204,6 +206,8 @@ class MLParams:
         one_of("distance", self.distance, DISTANCES)
         int_in("prune_similar", self.prune_similar, 1, 16)
         int_in("prune_sample", self.prune_sample, 0, 4096)
+        int_in("prune_projected", self.prune_projected, 0, 64)
+        int_in("prune_projected_k", self.prune_projected_k, 1, 256)
         if not (_real(self.prune_min_weight) and 0 <= self.prune_min_weight <= 1):
             raise InputError(f"prune_min_weight={self.prune_min_weight!r} must be a number in [0, 1] (the "
                              "mean (1 - t)^2 of a neighbourhood below which the pruned mode sums exactly)")

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.philox import bounded, sample_tag, voxel_words
+from ..errors import InputError
 from .model import ScaleModel, view_offsets, wrapped_coords
 from .params import VIEW_AXES, MLParams
 
@@ -179,12 +180,16 @@ def sample_sites(seed: int, tag: int, voxels: np.ndarray, shape: tuple[int, int,
 
 
 def term_weights(table: WindowTable, sources: np.ndarray, shifts: np.ndarray,
-                 sampled: np.ndarray | None) -> np.ndarray:
+                 sampled: np.ndarray | None, extra: np.ndarray | None = None) -> np.ndarray:
     """``(m, n_sites)``: the factor of each site's term in the pruned sum (for
-    :func:`clsolid.ml.reference.parzen`): 1 for the sites of the candidate windows, and
-    ``n_sites / count`` for the *sampled* ``(m, count)`` sites outside them (an unbiased
-    estimate of the rest of the sum), 0 for the others."""
-    keep = candidate_keep(table, sources, shifts).astype(np.float64)
+    :func:`clsolid.ml.reference.parzen`): 1 for the sites of the candidate windows (those of
+    the sources, and *extra* ``(m, K)`` windows, -1 for none), and ``n_sites / count`` for the
+    *sampled* ``(m, count)`` sites outside them (an unbiased estimate of the rest of the sum),
+    0 for the others."""
+    keep = candidate_keep(table, sources, shifts)
+    if extra is not None:
+        keep |= np.stack([np.isin(table.window_of, row[row >= 0]) for row in extra]).reshape(keep.shape)
+    keep = keep.astype(np.float64)
     if sampled is None or sampled.shape[1] == 0:
         return keep
     rest = np.zeros_like(keep)
@@ -231,6 +236,12 @@ class Pruning:
         self.model, self.params = model, params
         self.table = window_table(model, params.prune_similar, sources)
         self.voxel_offsets, self.exemplar_offsets = coherence_offsets(model, params.view_names)
+        self.projected = None
+        if params.prune_projected:
+            if model.mismatch:
+                raise InputError("prune_projected needs squared differences (distance='squared', a grey "
+                                 "exemplar's default); phases compared as names have no projection")
+            self.projected = ProjectedWindows.of(model, params.prune_projected)
 
     def exact(self, temp: np.ndarray, src: np.ndarray, voxels: np.ndarray) -> np.ndarray:
         """``(m,)`` bool: which *voxels* get the exact sum, given the temperatures and the
@@ -241,21 +252,34 @@ class Pruning:
         weights = np.stack([mean_square_weight(temp, wrapped_coords(voxels, m.shape, off)) for off in m.offsets])
         return needs_exact(src[:, voxels], weights, p.prune_min_weight, p.prune_sample)
 
-    def weights(self, src: np.ndarray, seed: int, tag: int, voxels: np.ndarray, view: int) -> np.ndarray:
+    def weights(self, src: np.ndarray, seed: int, tag: int, voxels: np.ndarray, view: int,
+                vol: np.ndarray | None = None) -> np.ndarray:
         """``(m, n_sites)``: each site's factor in the pruned sum of *voxels* in *view*
-        (:func:`term_weights`), their candidates taken from the sources ``(views, voxels)`` and
-        their sample from the sweep's random stream (*seed*, relaxation *tag*)."""
+        (:func:`term_weights`), their candidates taken from the sources ``(views, voxels)`` and,
+        with ``prune_projected``, the block *vol*'s projected nearest windows
+        (:meth:`projected_windows`), their sample from the sweep's random stream (*seed*,
+        relaxation *tag*)."""
         m = self.model
         nb = wrapped_coords(voxels, m.shape, self.voxel_offsets[view])
         sampled = sample_sites(seed, tag, voxels, m.shape, view, m.n_sites, self.params.prune_sample)
-        return term_weights(self.table, src[view][nb], self.exemplar_offsets[view], sampled)
+        extra = None if self.projected is None else self.projected_windows(vol, voxels, view)
+        return term_weights(self.table, src[view][nb], self.exemplar_offsets[view], sampled, extra)
+
+    def projected_windows(self, vol: np.ndarray, voxels: np.ndarray, view: int) -> np.ndarray:
+        """``(m, K)``: the windows of each voxel's ``prune_projected_k`` sites nearest by the
+        projected distance, nearest first, the lower site first on a tie (-1 past the sites)."""
+        k = self.params.prune_projected_k
+        order = np.argsort(self.projected.distances(self.model, vol, voxels, view), axis=1, kind="stable")[:, :k]
+        out = self.table.window_of[order]
+        return np.pad(out, ((0, 0), (0, k - out.shape[1])), constant_values=-1)
 
 
 @dataclass
 class ProjectedWindows:
     """The exemplar's windows projected on their first principal axes: a cheaper distance
-    to find a voxel's nearest sites by (squared differences only; measured, not yet a mode:
-    ``tools/prune_check.py --pca``, ``tools/prune_error.py --pca``).
+    to find a voxel's nearest sites by (squared differences only): the float64 reference of
+    ``prune_projected``'s candidates (the kernel ``projected_nearest``), and what
+    ``tools/prune_check.py --pca`` and ``tools/prune_error.py --pca`` measure.
 
     Each term is scaled as the window distance weighs it at t = 0 (the fall-off's weight);
     the neighbours' temperatures are left out of the search, which finds candidates whose
@@ -277,12 +301,15 @@ class ProjectedWindows:
         axes = np.linalg.svd(windows - mean, full_matrices=False)[2][:dims].T
         return cls(scale, mean, axes, (windows - mean) @ axes)
 
-    def nearest(self, model: ScaleModel, vol: np.ndarray, voxels: np.ndarray, view: int, k: int) -> np.ndarray:
-        """``(m, n)`` True on each voxel's *k* sites nearest by the projected distance (ties: any)."""
+    def distances(self, model: ScaleModel, vol: np.ndarray, voxels: np.ndarray, view: int) -> np.ndarray:
+        """``(m, n)``: each voxel's projected distance to every site."""
         x = vol.ravel()[wrapped_coords(voxels, model.shape, model.offsets[view])] * self.scale
         q = (x - self.mean) @ self.axes
-        d = (q**2).sum(axis=1)[:, None] - 2.0 * q @ self.sites.T + (self.sites**2).sum(axis=1)[None, :]
-        return smallest(d, k)
+        return (q**2).sum(axis=1)[:, None] - 2.0 * q @ self.sites.T + (self.sites**2).sum(axis=1)[None, :]
+
+    def nearest(self, model: ScaleModel, vol: np.ndarray, voxels: np.ndarray, view: int, k: int) -> np.ndarray:
+        """``(m, n)`` True on each voxel's *k* sites nearest by the projected distance (ties: any)."""
+        return smallest(self.distances(model, vol, voxels, view), k)
 
 
 def smallest(a: np.ndarray, k: int) -> np.ndarray:

@@ -239,7 +239,7 @@ class ReferenceBackend:
 
     def _pruned_view(self, view: int, voxels: np.ndarray, a: np.ndarray) -> np.ndarray:
         """The pruned sums of *voxels* in *view* from their distances *a* to every site; sets their sources."""
-        weights = self.pruning.weights(self.src, self.seed, self.tag, voxels, view)
+        weights = self.pruning.weights(self.src, self.seed, self.tag, voxels, view, self.vol)
         self.src[view, voxels] = pruned.nearest_source(self.pruning.table, a, weights)
         return parzen(self.model, a, weights)
 

@@ -262,7 +262,11 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
 
 
 #define NRV ((NR + 7) / 8)   /* neighbours per pruned-sum row, in float8 vectors */
-#define HB (9 * NS > 64 ? 8 : 7)   /* the candidate set's table: 2^HB slots, at least twice the candidates */
+#ifndef PROJ_K
+#define PROJ_K 0   /* the projected candidates an item takes (prune_projected_k; 0: none) */
+#endif
+#define NCAND (9 * NS + PROJ_K)
+#define HB (NCAND > 128 ? 9 : NCAND > 64 ? 8 : 7)   /* the candidate set's table: 2^HB slots, at least twice the candidates */
 #define HS (1 << HB)
 
 /* The slot of window wnd in the candidate set's open-addressing table: where it is, or the
@@ -296,6 +300,7 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
                                 __global const float *win_patches,   /* [window][NRV * 8] */
                                 __global const int *win_group, __global const float *win_logc,
                                 __global const int *win_source, int grid_rows, int grid_cols,
+                                __global const int *projected,   /* [item - item0][PROJ_K] windows, -1: none */
                                 int n_sample, uint key0, uint key1, uint tag,
                                 int n_groups, float k, __global float *log_sums)
 {
@@ -318,7 +323,7 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
         if (!seen) base[nb++] = wnd;
     }
     /* their similar windows, each once: a small open-addressing set keeps the distinct ones */
-    int cand[9 * NS], nc = 0, seen[HS];
+    int cand[NCAND], nc = 0, seen[HS];
     for (int i = 0; i < HS; ++i) seen[i] = -1;
     for (int j = 0; j < nb; ++j) {
         __global const int *sim = similar + base[j] * NS;
@@ -328,6 +333,14 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
             seen[h] = wnd;
             cand[nc++] = wnd;
         }
+    }
+    for (int j = 0; j < PROJ_K; ++j) {   /* the projected candidates (projected_nearest), each once */
+        int wnd = projected[(size_t)(item - item0) * PROJ_K + j];
+        if (wnd < 0) continue;
+        int h = slot_of(seen, wnd);
+        if (seen[h] == wnd) continue;
+        seen[h] = wnd;
+        cand[nc++] = wnd;
     }
 
     float8 xw[NRV], w[NRV];
@@ -386,6 +399,63 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
     for (int g = 0; g < NGV * VW; ++g)
         log_sums[(size_t)item * NGV * VW + g] = g < n_groups && gsum[g] > 0.0f ? gmax[g] + log(gsum[g]) : -INFINITY;
 }
+
+#if PROJ_K > 0
+#define PDV ((PROJ_D + 7) / 8)
+/* The PROJ_K sites nearest to each item's window (items item0 <= i < n_items) by the distance
+ * between projections on the exemplar windows' first PROJ_D principal axes
+ * (clsolid.ml.pruned.ProjectedWindows): the window, each term times proj_scale (the fall-off's
+ * square root; the temperatures left out), less proj_mean, times proj_axes [NR][PROJ_D]; its
+ * squared distance to every site's projection proj_sites [site][PROJ_D] (both in float8 rows of
+ * PDV, zero-padded); the PROJ_K least kept,
+ * nearest first, the lower site first on a tie. Writes their windows (window_of), -1 past the
+ * sites, to projected [item - item0][PROJ_K]. */
+__kernel void projected_nearest(__global const float *vol, int Z, int Y, int X,
+                                __global const int *voxels, int item0, int n_items, int n_views,
+                                __global const int *offsets, __global const float *proj_scale,
+                                __global const float *proj_mean, __global const float8 *proj_axes,
+                                __global const float8 *proj_sites, int n_sites,
+                                __global const int *window_of, __global int *projected)
+{
+    int item = item0 + get_global_id(0);
+    if (item >= n_items) return;
+    int voxel = voxels[item / n_views], view = item % n_views;
+    int z = voxel / (Y * X), rem = voxel - z * Y * X;
+    int y = rem / X, x = rem - y * X;
+    float8 q[PDV];   /* the axes come in float8 rows, zero-padded past PROJ_D */
+    for (int d = 0; d < PDV; ++d) q[d] = (float8)(0.0f);
+    __global const int *off = offsets + view * NR * 3;
+    for (int r = 0; r < NR; ++r) {
+        float v = vol[shifted(z, y, x, Z, Y, X, off + 3 * r)] * proj_scale[r] - proj_mean[r];
+        for (int d = 0; d < PDV; ++d) q[d] += v * proj_axes[r * PDV + d];
+    }
+    float best[PROJ_K];
+    int site[PROJ_K];
+    for (int j = 0; j < PROJ_K; ++j) {
+        best[j] = INFINITY;
+        site[j] = -1;
+    }
+    for (int s = 0; s < n_sites; ++s) {
+        float8 acc = (float8)(0.0f);
+        for (int d = 0; d < PDV; ++d) {
+            float8 e = q[d] - proj_sites[(size_t)s * PDV + d];
+            acc += e * e;
+        }
+        float4 h = acc.lo + acc.hi;
+        float a = (h.x + h.y) + (h.z + h.w);
+        if (!(a < best[PROJ_K - 1])) continue;   /* a tie keeps the lower site, met first */
+        int j = PROJ_K - 1;
+        for (; j > 0 && best[j - 1] > a; --j) {
+            best[j] = best[j - 1];
+            site[j] = site[j - 1];
+        }
+        best[j] = a;
+        site[j] = s;
+    }
+    for (int j = 0; j < PROJ_K; ++j)
+        projected[(size_t)(item - item0) * PROJ_K + j] = site[j] < 0 ? -1 : window_of[site[j]];
+}
+#endif
 
 /* flags[i] = 1 where voxel voxels[i] needs the exact sum (clsolid.ml.pruned.needs_exact): some
  * view's mean (1 - t)^2 over its neighbours below min_weight, or (need_source) no source yet. */
