@@ -133,13 +133,14 @@ class CLBackend:
                               "and gives the same volume") from None
 
     # -- kernels -----------------------------------------------------------------------
-    def _kernels(self, model: ScaleModel, n_labels: int) -> dict:
+    def _kernels(self, model: ScaleModel, n_labels: int, projected: pruned.ProjectedWindows | None = None) -> dict:
+        """The likelihood program for *model*; *projected*: the pruned sum's projected candidates, if any."""
         views, nr = model.offsets.shape[:2]
         return programs.build(self.device, "ml/likelihood.cl", {
             "NR": nr, "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
             "NS": self.params.prune_similar if self.params.likelihood == "pruned" else 1,
-            **({"PROJ_K": _projected_k(self.params), "PROJ_D": min(self.params.prune_projected, nr, model.n_sites)}
-               if _projected_k(self.params) else {}),
+            **({"PROJ_K": self.params.prune_projected_k, "PROJ_D": projected.axes.shape[1]}
+               if projected is not None else {}),
             "MISMATCH": 2 if model.costs is not None else int(model.mismatch),
             **({"COSTS": _float_literals(model.costs)} if model.costs is not None else {}),
             **({"FALLOFF": _float_literals(np.sqrt(model.term_weight))} if model.term_weight is not None else {}),
@@ -199,9 +200,10 @@ class CLBackend:
         self.check_memory(model, block)
         self.model, self.params = model, params
         self.capacity = int(np.prod(block))
-        self.k = self._kernels(model, n_labels)
-        patches, chunk_group, chunk_valid, gvals, chunk_site = group_tables(model, self.vw)
         canon = source_of_site(model)
+        pruning = pruned.Pruning(model, params, canon) if params.likelihood == "pruned" else None
+        self.k = self._kernels(model, n_labels, None if pruning is None else pruning.projected)
+        patches, chunk_group, chunk_valid, gvals, chunk_site = group_tables(model, self.vw)
         self.chunk_site = self._buf(canon[chunk_site])  # the source each lane records
         views = model.offsets.shape[0]
         mf, ctx = cl.mem_flags, self.device.context
@@ -209,8 +211,8 @@ class CLBackend:
         self.temp_buf = cl.Buffer(ctx, mf.READ_WRITE, self.capacity * _F4)
         self.src = cl.Buffer(ctx, mf.READ_WRITE, views * self.capacity * _F4)
         self.batch = batch = min(self.max_batch, self.capacity)
-        if params.likelihood == "pruned":
-            self._start_pruned(pruned.Pruning(model, params, canon), gvals, batch)
+        if pruning is not None:
+            self._start_pruned(pruning, gvals, batch)
         self.n_groups, self.n_chunks = gvals.size, chunk_group.size
         self.patches = self._buf(patches)
         self.chunk_group, self.chunk_valid = self._buf(chunk_group), self._buf(chunk_valid)
@@ -279,7 +281,7 @@ class CLBackend:
                         np.int32(table.grid[0]), np.int32(table.grid[1]))
         self.flags_buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, batch * _F4)
         proj, views = pruning.projected, model.offsets.shape[0]
-        k = _projected_k(pruning.params)
+        k = 0 if proj is None else pruning.params.prune_projected_k
         self.projected_out = cl.Buffer(self.device.context, cl.mem_flags.READ_WRITE, max(1, batch * views * k) * _F4)
         self.projection = None if proj is None else (
             self._buf(proj.scale.astype(np.float32)), self._buf(proj.mean.astype(np.float32)),
@@ -481,8 +483,3 @@ def _float8_rows(a: np.ndarray) -> np.ndarray:
     out = np.zeros((a.shape[0], -(-a.shape[1] // 8) * 8), np.float32)
     out[:, : a.shape[1]] = a
     return out
-
-
-def _projected_k(params: MLParams) -> int:
-    """The projected candidates an item takes: ``prune_projected_k`` with ``prune_projected``, else 0."""
-    return params.prune_projected_k if params.likelihood == "pruned" and params.prune_projected else 0

@@ -236,12 +236,7 @@ class Pruning:
         self.model, self.params = model, params
         self.table = window_table(model, params.prune_similar, sources)
         self.voxel_offsets, self.exemplar_offsets = coherence_offsets(model, params.view_names)
-        self.projected = None
-        if params.prune_projected:
-            if model.mismatch:
-                raise InputError("prune_projected needs squared differences (distance='squared', a grey "
-                                 "exemplar's default); phases compared as names have no projection")
-            self.projected = ProjectedWindows.of(model, params.prune_projected)
+        self.projected = ProjectedWindows.of(model, params.prune_projected) if params.prune_projected else None
 
     def exact(self, temp: np.ndarray, src: np.ndarray, voxels: np.ndarray) -> np.ndarray:
         """``(m,)`` bool: which *voxels* get the exact sum, given the temperatures and the
@@ -294,7 +289,8 @@ class ProjectedWindows:
     def of(cls, model: ScaleModel, dims: int) -> "ProjectedWindows":
         """The first *dims* axes of *model*'s windows (all of them if it has fewer terms)."""
         if model.mismatch:
-            raise ValueError("projected windows need squared differences (a grey exemplar)")
+            raise InputError("prune_projected needs squared differences (distance='squared', a grey "
+                             "exemplar's default); phases compared as names have no projection")
         scale = np.ones(model.patches.shape[0]) if model.term_weight is None else np.sqrt(model.term_weight)
         windows = model.patches.T * scale
         mean = windows.mean(axis=0)
