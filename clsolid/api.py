@@ -35,7 +35,7 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
                "prune_similar", "prune_sample", "prune_min_weight", "prune_projected",
-               "prune_projected_k", "falloff")
+               "prune_projected_k", "prune_projected_probe", "falloff")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
 _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
@@ -310,13 +310,16 @@ def synthesize(
         number), plus an unbiased estimate of the rest from ``prune_sample`` (64) sites
         drawn systematically; with ``prune_projected=D`` (0: off) also each voxel's
         ``prune_projected_k`` (64) sites nearest by the distance projected on the exemplar
-        windows' first D principal axes (squared differences only; README, Performance);
-        a neighbourhood whose mean (1 - t)^2 is below
-        ``prune_min_weight`` (default 0: none) gets the exact sum (``clsolid.ml.pruned``).
-        Accurate on categorical exemplars, approximate on grey ones (README, Performance), so
-        ``"auto"`` (default) prunes categorical exemplars (binary or segmented: their own
-        values kept, at most 8 of them) and sums grey ones exactly; the result's ``params``
-        say which it took.
+        windows' first D principal axes (squared differences only; README, Performance),
+        searched in the ``prune_projected_probe`` (8) lists of sites (about sqrt(sites)
+        lists, by k-means) whose centres are nearest (0: every site); a neighbourhood whose
+        mean (1 - t)^2 is below ``prune_min_weight`` (default 0: none) gets the exact sum
+        (``clsolid.ml.pruned``). ``"auto"`` (default) prunes categorical exemplars (binary or
+        segmented: their own values kept, at most 8 of them) and grey ones with at least
+        10,000 sites (about 110² pixels at 11×11), those with ``prune_projected=24``
+        (``None``, the default, decides so), and sums smaller grey ones exactly, where the
+        pruned sum missed fine fringes and saved little (README, Performance); the result's
+        ``params`` say what it took.
 
         Distance: ``distance="squared"`` compares neighbourhoods and centre values by squared
         grey-level differences (the thesis); ``"mismatch"`` counts the neighbours whose levels
@@ -363,7 +366,7 @@ def synthesize(
     params = MLParams(neighborhood=neighborhood, scales=scales, views=views, levels=levels,
                       heuristic="h2-product" if heuristic is None else heuristic, **{k: options[k] for k in _ML_OPTIONS if k in options})
     image, levels_of, seed = _load(exemplar, levels, rng, options)
-    params = params.for_exemplar(levels_of.values.size, levels_of.exact, seam_ratio(image))
+    params = params.for_exemplar(levels_of.values.size, levels_of.exact, seam_ratio(image), image.shape[:2])
     backend = make_backend(device, {k: options[k] for k in _BACKEND_OPTIONS if k in options})
     hook = None
     if options.get("checkpoint") is not None:

@@ -157,7 +157,8 @@ def _add_synth(sub) -> None:
     p.add_argument("--likelihood", choices=LIKELIHOODS, default=d.likelihood,
                    help="the Parzen sum over every exemplar site (exact, the thesis) or over k-coherence "
                         "candidates plus a sample of the other sites (pruned); auto (default): pruned for "
-                        "categorical exemplars (at most 8 values, kept), exact for grey ones")
+                        "categorical exemplars (at most 8 values, kept) and grey ones of at least 10,000 sites "
+                        "(with --prune-projected 24), exact for smaller grey ones")
     p.add_argument("--distance", choices=DISTANCES, default=d.distance,
                    help="how neighbourhoods differ: squared grey-level differences (squared, the thesis), the "
                         "count of differing levels (mismatch: phases are names, not numbers), or that count with "
@@ -171,9 +172,13 @@ def _add_synth(sub) -> None:
                    help="pruned: sites sampled to estimate the rest of the sum (default %(default)s)")
     p.add_argument("--prune-projected", type=int, default=d.prune_projected, metavar="AXES",
                    help="pruned, grey exemplars: also take each voxel's nearest sites by the distance projected "
-                        "on the exemplar windows' first AXES principal axes (default %(default)s: off; 24 measured)")
+                        "on the exemplar windows' first AXES principal axes (0: off; default: 24 where auto prunes "
+                        "a grey exemplar of at least 10,000 sites, else off)")
     p.add_argument("--prune-projected-k", type=int, default=d.prune_projected_k, metavar="K",
                    help="pruned: the projected candidates a voxel and view takes (default %(default)s)")
+    p.add_argument("--prune-projected-probe", type=int, default=d.prune_projected_probe, metavar="P",
+                   help="pruned: search only the P lists of sites (about sqrt(sites) lists) whose centres are "
+                        "nearest to the voxel's projection (default %(default)s; 0: every site)")
     p.add_argument("--prune-min-weight", type=float, default=d.prune_min_weight,
                    help="pruned: a neighbourhood whose mean (1 - t)^2 is below this gets the exact sum "
                         "(default %(default)s: never)")
@@ -315,8 +320,8 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "insert_slices", "insert_spacing", "insert_piece", "seam_gap", "slice_layout", "initial_temperature",
             "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
-            "prune_similar", "prune_sample", "prune_min_weight", "prune_projected", "prune_projected_k", "falloff",
-            "tile", "scheduler", "workers", "indices",
+            "prune_similar", "prune_sample", "prune_min_weight", "prune_projected", "prune_projected_k",
+            "prune_projected_probe", "falloff", "tile", "scheduler", "workers", "indices",
             "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "parent_weight", "init", "rule", "order", "causal", "histogram",
             "candidates", "specify", "search", "exact_passes", "site_map", "source_map")
@@ -386,7 +391,8 @@ def _ml_options(args) -> dict:
                    sweeps=args.sweeps, balance=args.balance, likelihood=args.likelihood,
                    distance=args.distance, prune_similar=args.prune_similar, prune_sample=args.prune_sample,
                    prune_min_weight=args.prune_min_weight, prune_projected=args.prune_projected,
-                   prune_projected_k=args.prune_projected_k, falloff=args.falloff)
+                   prune_projected_k=args.prune_projected_k, prune_projected_probe=args.prune_projected_probe,
+                   falloff=args.falloff)
     if args.tile is not None:
         options["tile"] = args.tile
     for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale

@@ -36,9 +36,12 @@ def _backends(device, model, params, vol, temp, sources=None):
     return out
 
 
-def test_similar_windows_are_the_nearest_lowest_index_first():
-    rows = np.random.default_rng(1).integers(0, 3, (300, 8))
-    got = pruned.similar_windows(rows, 6)
+@pytest.mark.parametrize("levels, offset", [(3, 0), (40, 0), (40, 10**4)])
+def test_similar_windows_are_the_nearest_lowest_index_first(levels, offset):
+    """Many ties (3 levels) and few; small whole numbers (summed in float32) and large ones
+    (float64: an offset leaves every distance as it is)."""
+    rows = np.random.default_rng(1).integers(0, levels, (300, 8))
+    got = pruned.similar_windows(rows + offset, 6)
     d = ((rows[:, None, :] - rows[None, :, :]) ** 2).sum(-1).astype(float)
     np.fill_diagonal(d, np.inf)
     want = np.lexsort((np.broadcast_to(np.arange(300), d.shape), d), axis=1)[:, :5]
@@ -79,18 +82,21 @@ def test_exact_kernel_records_the_nearest_site(device, small_labels):
 
 
 @pytest.mark.parametrize("k, views, similar, sample, distance, falloff, projected",
+                         # projected: axes, or (axes, lists probed)
                          [(3, 2, 1, 0, "squared", 0, 0), (5, 3, 8, 0, "squared", 0, 0), (7, 2, 16, 0, "squared", 0, 0),
                           (5, 2, 8, 64, "squared", 0, 0), (7, 3, 4, 17, "squared", 0, 0),
                           (5, 3, 8, 0, "mismatch", 0, 0), (7, 2, 4, 17, "mismatch", 0, 0),
                           (5, 2, 8, 17, "weighted", 0, 0), (7, 2, 8, 17, "squared", 2.0, 0),
                           (5, 3, 4, 0, "weighted", 1.0, 0),
                           # projected candidates (8 axes, 20 a voxel): with and without a sample and fall-off
-                          (5, 2, 4, 0, "squared", 0, 8), (7, 3, 8, 17, "squared", 2.0, 8)])
+                          (5, 2, 4, 0, "squared", 0, 8), (7, 3, 8, 17, "squared", 2.0, 8),
+                          (5, 2, 4, 0, "squared", 2.0, (8, 2))])
 def test_pruned_lcpdf_matches_reference(device, small_labels, k, views, similar, sample, distance, falloff,
                                         projected):
+    axes, probe = projected if isinstance(projected, tuple) else (projected, 0)
     params, model = _model(small_labels, neighborhood=k, views=views, likelihood="pruned", prune_similar=similar,
-                           prune_sample=sample, distance=distance, falloff=falloff, prune_projected=projected,
-                           prune_projected_k=20)
+                           prune_sample=sample, distance=distance, falloff=falloff, prune_projected=axes,
+                           prune_projected_k=20, prune_projected_probe=probe)
     vol, temp, sources = _state(model, seed=k)
     cl_b, ref = _backends(device, model, params, vol, temp, sources)
     voxels = np.flatnonzero(model.colour.ravel() == 0)
@@ -229,21 +235,23 @@ def test_pruned_run_resumes_identically(tmp_path, device, name):
 @pytest.mark.parametrize("bad", [dict(likelihood="fast"), dict(prune_similar=0), dict(prune_similar=17),
                                  dict(prune_min_weight=1.5), dict(prune_min_weight="x"), dict(prune_sample=-1),
                                  dict(prune_sample=5000), dict(prune_projected=-1), dict(prune_projected=65),
-                                 dict(prune_projected_k=0), dict(prune_projected=True)])
+                                 dict(prune_projected_k=0), dict(prune_projected=True),
+                                 dict(prune_projected_probe=-1), dict(prune_projected_probe=2.0)])
 def test_bad_pruned_parameters_are_refused(bad):
     with pytest.raises(InputError, match=next(iter(bad))):
         MLParams(**bad)
 
 
-@pytest.mark.parametrize("name, levels, want", [("porous50", 32, "pruned"), ("brick", 32, "exact"),
-                                                ("brick", 8, "exact")])
-def test_auto_prunes_categorical_exemplars_only(device, name, levels, want):
+@pytest.mark.parametrize("name, size, levels, want", [("porous50", 64, 32, "pruned"), ("brick", 64, 32, "exact"),
+                                                      ("brick", 64, 8, "exact"), ("gravel", 128, 32, "pruned")])
+def test_auto_prunes_categorical_and_large_grey_exemplars(device, name, size, levels, want):
     from clsolid.gallery import gallery_exemplar
 
-    image = name if name == "brick" else gallery_exemplar(name, 64)
+    image = name if name == "brick" else gallery_exemplar(name, size)
     res = clsolid.synthesize(image, (8, 8, 8), levels=levels, scales=1, neighborhood=3, rng=1, device=device,
                              full_output=True)
     assert res.params["likelihood"] == want
+    assert res.params["prune_projected"] == (24 if name == "gravel" else 0)  # grey and large: projected
     forced = clsolid.synthesize(image, (8, 8, 8), levels=levels, scales=1, neighborhood=3, rng=1, device=device,
                                 likelihood="exact" if want == "pruned" else "pruned", full_output=True)
     assert forced.params["likelihood"] != want
@@ -263,6 +271,22 @@ def test_projected_windows_with_every_axis_find_the_exact_nearest_sites():
     assert not np.array_equal(pruned.ProjectedWindows.of(model, 1).nearest(model, vol, voxels, 1, 6), want)
 
 
+def test_auto_projects_grey_exemplars_from_ten_thousand_sites():
+    from clsolid.ml.params import AUTO_PROJECTED_SITES
+
+    assert AUTO_PROJECTED_SITES == 10_000
+    side = 100 + 11 - 1  # 100 x 100 sites of an 11 x 11 window
+    for shape, grey, want in [((side, side), True, ("pruned", 24)), ((side, side - 1), True, ("exact", 0)),
+                              (None, True, ("exact", 0)), ((side, side), False, ("pruned", 0))]:
+        got = MLParams().for_exemplar(32 if grey else 3, not grey, 0.0, shape)
+        assert (got.likelihood, got.prune_projected) == want
+    given = MLParams(prune_projected=0).for_exemplar(32, False, 0.0, (side, side))
+    assert (given.likelihood, given.prune_projected) == ("pruned", 0)
+    exact = MLParams(likelihood="exact").for_exemplar(32, False, 0.0, (side, side))
+    assert (exact.likelihood, exact.prune_projected) == ("exact", 0)
+    assert MLParams(likelihood="pruned").for_exemplar(32, False, 0.0, (64, 64)).prune_projected == 0
+
+
 def test_projected_windows_refuse_mismatch_distances():
     _, model = _model(np.random.default_rng(0).integers(0, 3, (14, 15)), neighborhood=5, distance="weighted")
     with pytest.raises(ValueError, match="squared differences"):
@@ -275,11 +299,42 @@ def test_smallest_keeps_k_per_row_and_whole_rows_when_k_is_larger():
     assert pruned.smallest(a, 9).all()
 
 
-def test_projected_candidates_are_the_references(device, small_labels):
-    """The kernel's projected nearest windows (top K by the projected distance, lower site
-    first on a tie) are the float64 reference's, item by item."""
+def test_site_lists_are_deterministic_nonempty_and_centred():
+    sites = np.random.default_rng(3).normal(size=(500, 6))
+    centres, list_of = pruned.site_lists(sites, 22)
+    assert np.bincount(list_of).min() > 0 and centres.shape == (list_of.max() + 1, 6) and centres.shape[0] <= 22
+    for c in range(centres.shape[0]):
+        np.testing.assert_allclose(centres[c], sites[list_of == c].mean(axis=0))
+    again = pruned.site_lists(sites, 22)
+    assert np.array_equal(again[1], list_of) and np.array_equal(again[0], centres)
+    assert np.array_equal(pruned.site_lists(sites[:5], 22)[1], np.arange(5))  # at most one list a site
+
+
+def test_projected_lists_probed_all_find_what_every_site_finds():
+    """Reading every list is the whole search; fewer lists read fewer sites and miss some."""
+    labels = np.random.default_rng(4).integers(0, 8, (20, 21))
+    _, model = _model(labels, neighborhood=5, falloff=2.0)
+    vol, _, _ = _state(model)
+    voxels = np.arange(0, vol.size, 5)
+    whole = pruned.ProjectedWindows.of(model, 8)
+    lists = pruned.ProjectedWindows.of(model, 8, probe=1)
+    n_lists = lists.centres.shape[0]
+    assert n_lists == round(np.sqrt(model.n_sites)) and whole.centres.shape[0] == 1
+    every = pruned.ProjectedWindows.of(model, 8, probe=n_lists + 5)
+    assert every.probe == n_lists
+    np.testing.assert_allclose(every.distances(model, vol, voxels, 1), whole.distances(model, vol, voxels, 1))
+    one = lists.distances(model, vol, voxels, 1)
+    assert np.isfinite(one).sum(axis=1).max() < model.n_sites / 3
+    near = np.isfinite(one)
+    np.testing.assert_allclose(one[near], whole.distances(model, vol, voxels, 1)[near])
+
+
+@pytest.mark.parametrize("probe", [0, 3])
+def test_projected_candidates_are_the_references(device, small_labels, probe):
+    """The kernel's projected nearest windows (top K by the projected distance among the
+    sites searched, lower site first on a tie) are the float64 reference's, item by item."""
     params, model = _model(small_labels, neighborhood=5, likelihood="pruned", falloff=2.0, prune_projected=6,
-                           prune_projected_k=12)
+                           prune_projected_k=12, prune_projected_probe=probe)
     vol, temp, sources = _state(model, seed=2)
     cl_b, ref = _backends(device, model, params, vol, temp, sources)
     voxels = np.flatnonzero(model.colour.ravel() == 1).astype(np.int32)

@@ -12,6 +12,7 @@ on labels the exact one gives at least 1 %, and how often the most probable labe
     python tools/prune_error.py                         # porous50, composite3, gravel, brick at 48^3
     python tools/prune_error.py --names hrtem --shape 32 --set prune_similar=4
     python tools/prune_error.py --names hrtem gravel --pca 24 64     # and K = 64 candidates found by PCA
+    python tools/prune_error.py --names hrtem --pca 24 64 --probe 8  # ... in the 8 nearest lists of sites
 
 The run takes the parameters ``synthesize`` would (``MLParams.for_exemplar``: the fall-off on
 grey exemplars, the mismatch distances on categorical ones), with the pruned sum everywhere.
@@ -40,15 +41,15 @@ from clsolid.ml.reference import normalise, parzen, site_distances
 class _Probe(CLBackend):
     """A back end that measures a sample of the first set of each sweep before relaxing it."""
 
-    def __init__(self, device, sample: int, pca: tuple[int, int] | None = None):
+    def __init__(self, device, sample: int, pca: tuple[int, int] | None = None, probe: int = 0):
         super().__init__(device)
-        self.sample, self.rows, self.rng, self.pca = sample, [], np.random.default_rng(0), pca
+        self.sample, self.rows, self.rng, self.pca, self.probe = sample, [], np.random.default_rng(0), pca, probe
 
     def start_scale(self, model: ScaleModel, vol, temp, params, sources=None) -> None:
         self.sweep, self.tag = -1, None  # start_scale's own start_sweep is not a sweep
         super().start_scale(model, vol, temp, params, sources)
         self.pruning = pruned.Pruning(model, params)
-        self.projected = None if self.pca is None else pruned.ProjectedWindows.of(model, self.pca[0])
+        self.projected = None if self.pca is None else pruned.ProjectedWindows.of(model, self.pca[0], self.probe)
 
     def start_sweep(self, seed, tag, t_in, bias) -> None:
         super().start_sweep(seed, tag, t_in, bias)
@@ -103,6 +104,9 @@ def main(argv: list[str] | None = None) -> None:
                     help="also measure the exact terms of the K sites nearest by the distance projected on the "
                          "exemplar windows' first DIMS principal axes (grey exemplars; clsolid.ml.pruned."
                          "ProjectedWindows)")
+    ap.add_argument("--probe", type=int, default=0, metavar="P",
+                    help="with --pca: search only the P lists of sites whose centres are nearest (about sqrt(sites) "
+                         "lists, clsolid.ml.pruned.site_lists; default 0: every site)")
     args = ap.parse_args(argv)
     options = {k: json.loads(v) for k, v in (s.split("=", 1) for s in args.set)}
     params = MLParams(**{"likelihood": "pruned", **options})
@@ -111,7 +115,7 @@ def main(argv: list[str] | None = None) -> None:
           f"prune_min_weight={params.prune_min_weight}; {device.name}")
     for name in args.names:
         image = builtin_exemplar(name) if name in ("brick", "grass", "gravel") else gallery_exemplar(name, 64)
-        probe = _Probe(device, args.sample, None if args.pca is None else tuple(args.pca))
+        probe = _Probe(device, args.sample, None if args.pca is None else tuple(args.pca), args.probe)
         levels = level_map(image, params.levels)
         run_params = params.for_exemplar(levels.values.size, levels.exact, seam_ratio(image))  # as synthesize
         t = time.perf_counter()

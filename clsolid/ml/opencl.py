@@ -139,7 +139,7 @@ class CLBackend:
         return programs.build(self.device, "ml/likelihood.cl", {
             "NR": nr, "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
             "NS": self.params.prune_similar if self.params.likelihood == "pruned" else 1,
-            **({"PROJ_K": self.params.prune_projected_k, "PROJ_D": projected.axes.shape[1]}
+            **({"PROJ_K": self.params.prune_projected_k, "PROJ_D": projected.axes.shape[1], "PROJ_P": projected.probe}
                if projected is not None else {}),
             "MISMATCH": 2 if model.costs is not None else int(model.mismatch),
             **({"COSTS": _float_literals(model.costs)} if model.costs is not None else {}),
@@ -283,10 +283,16 @@ class CLBackend:
         proj, views = pruning.projected, model.offsets.shape[0]
         k = 0 if proj is None else pruning.params.prune_projected_k
         self.projected_out = cl.Buffer(self.device.context, cl.mem_flags.READ_WRITE, max(1, batch * views * k) * _F4)
-        self.projection = None if proj is None else (
-            self._buf(proj.scale.astype(np.float32)), self._buf(proj.mean.astype(np.float32)),
-            self._buf(_float8_rows(proj.axes)), self._buf(_float8_rows(proj.sites)),
-            np.int32(model.n_sites), self.windows[0])
+        self.projection = None if proj is None else self._projection(proj)
+
+    def _projection(self, proj: pruned.ProjectedWindows) -> tuple:
+        """The projected search's arguments: the sites sorted by list (the lower site first)."""
+        order = np.argsort(proj.list_of, kind="stable")
+        start = np.searchsorted(proj.list_of[order], np.arange(proj.centres.shape[0] + 1))
+        return (self._buf(proj.scale.astype(np.float32)), self._buf(proj.mean.astype(np.float32)),
+                self._buf(_float8_rows(proj.axes)), self._buf(_float8_rows(proj.centres)),
+                np.int32(proj.centres.shape[0]), self._buf(start.astype(np.int32)),
+                self._buf(order.astype(np.int32)), self._buf(_float8_rows(proj.sites[order])), self.windows[0])
 
     def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
         """Random stream (Philox key *seed*, counter tag *tag*), global temperature *t_in*

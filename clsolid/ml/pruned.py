@@ -26,6 +26,7 @@ float64 reference of the kernel's candidate set.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -67,28 +68,40 @@ class WindowTable:
 
 def similar_windows(neighbours: np.ndarray, count: int) -> np.ndarray:
     """``(U, count)`` int32: each row's index first, then its ``count - 1`` nearest other rows
-    of *neighbours* ``(U, R)`` by squared distance, lower index first on a tie.
+    of *neighbours* ``(U, R)`` by squared distance (rounded to a whole number), lower index
+    first on a tie.
 
-    The rows are grey levels (whole numbers), so each distance is a whole number, exact in
-    float64; distance and index are packed into one int64 key, so every order is unique.
+    Grey levels and one-hot codes are whole numbers: while every distance is below 2^22 they
+    are exact in float32 in any order of summation, which halves the work; else float64.
     """
     u = neighbours.shape[0]
     count = min(count, u)
-    x = neighbours.astype(np.float64)
-    sq = np.sum(x * x, axis=1)
     out = np.empty((u, count), np.int32)
     out[:, 0] = np.arange(u)
     if count == 1:
         return out
-    index = np.arange(u, dtype=np.int64)
+    x = neighbours.astype(np.float64)
+    sq = np.sum(x * x, axis=1)
+    if np.array_equal(x, np.rint(x)) and 4.0 * sq.max() < 2.0**24:
+        x, sq = x.astype(np.float32), sq.astype(np.float32)
+    index = np.arange(u)
     for lo in range(0, u, _BLOCK):
         hi = min(u, lo + _BLOCK)
-        d = np.rint(sq[lo:hi, None] + sq[None, :] - 2.0 * (x[lo:hi] @ x.T)).astype(np.int64)
-        key = d * u + index[None, :]
-        key[np.arange(hi - lo), np.arange(lo, hi)] = np.iinfo(np.int64).max  # itself is first already
-        part = np.argpartition(key, count - 2, axis=1)[:, : count - 1]
-        order = np.argsort(np.take_along_axis(key, part, axis=1), axis=1)
-        out[lo:hi, 1:] = np.take_along_axis(part, order, axis=1)
+        rows = np.arange(hi - lo)
+        d = x[lo:hi] @ x.T
+        d *= -2.0
+        d += sq[None, :]
+        d += sq[lo:hi, None]
+        np.rint(d, out=d)
+        d[rows, rows + lo] = np.inf  # itself is first already
+        part = np.argpartition(d, count - 1, axis=1)[:, :count]
+        near = np.take_along_axis(d, part, axis=1)
+        clear = near[:, :-1].max(axis=1) < near[:, -1]  # no tie across the cut: the nearest are these
+        kept, dist = part[clear, :-1], near[clear, :-1]
+        order = np.lexsort((kept, dist), axis=1)
+        out[lo:hi][clear, 1:] = np.take_along_axis(kept, order, axis=1)
+        for i in np.flatnonzero(~clear):  # a tie across the cut: the whole row by (distance, index)
+            out[lo + i, 1:] = np.lexsort((index, d[i]))[: count - 1]
     return out
 
 
@@ -236,7 +249,8 @@ class Pruning:
         self.model, self.params = model, params
         self.table = window_table(model, params.prune_similar, sources)
         self.voxel_offsets, self.exemplar_offsets = coherence_offsets(model, params.view_names)
-        self.projected = ProjectedWindows.of(model, params.prune_projected) if params.prune_projected else None
+        self.projected = (ProjectedWindows.of(model, params.prune_projected, params.prune_projected_probe)
+                          if params.prune_projected else None)
 
     def exact(self, temp: np.ndarray, src: np.ndarray, voxels: np.ndarray) -> np.ndarray:
         """``(m,)`` bool: which *voxels* get the exact sum, given the temperatures and the
@@ -262,10 +276,12 @@ class Pruning:
 
     def projected_windows(self, vol: np.ndarray, voxels: np.ndarray, view: int) -> np.ndarray:
         """``(m, K)``: the windows of each voxel's ``prune_projected_k`` sites nearest by the
-        projected distance, nearest first, the lower site first on a tie (-1 past the sites)."""
+        projected distance among the sites it searches, nearest first, the lower site first on a
+        tie (-1 past them)."""
         k = self.params.prune_projected_k
-        order = np.argsort(self.projected.distances(self.model, vol, voxels, view), axis=1, kind="stable")[:, :k]
-        out = self.table.window_of[order]
+        d = self.projected.distances(self.model, vol, voxels, view)
+        order = np.argsort(d, axis=1, kind="stable")[:, :k]
+        out = np.where(np.isfinite(np.take_along_axis(d, order, axis=1)), self.table.window_of[order], -1)
         return np.pad(out, ((0, 0), (0, k - out.shape[1])), constant_values=-1)
 
 
@@ -284,10 +300,15 @@ class ProjectedWindows:
     mean: np.ndarray  # (R,) the mean scaled window
     axes: np.ndarray  # (R, dims) the first principal axes
     sites: np.ndarray  # (n, dims) every site's projection
+    centres: np.ndarray  # (C, dims) the centres of the site lists (one list, every site: C = 1)
+    list_of: np.ndarray  # (n,) each site's list
+    probe: int  # the lists searched, nearest centres first
 
     @classmethod
-    def of(cls, model: ScaleModel, dims: int) -> "ProjectedWindows":
-        """The first *dims* axes of *model*'s windows (all of them if it has fewer terms)."""
+    def of(cls, model: ScaleModel, dims: int, probe: int = 0) -> "ProjectedWindows":
+        """The first *dims* axes of *model*'s windows (all of them if it has fewer terms), and
+        with *probe* > 0 the sites split into about sqrt(n) lists (:func:`site_lists`) of
+        which a search reads the *probe* whose centres are nearest (0: one list, every site)."""
         if model.mismatch:
             raise InputError("prune_projected needs squared differences (distance='squared', a grey "
                              "exemplar's default); phases compared as names have no projection")
@@ -295,17 +316,60 @@ class ProjectedWindows:
         windows = model.patches.T * scale
         mean = windows.mean(axis=0)
         axes = np.linalg.svd(windows - mean, full_matrices=False)[2][:dims].T
-        return cls(scale, mean, axes, (windows - mean) @ axes)
+        sites = (windows - mean) @ axes
+        if probe:
+            centres, list_of = site_lists(sites, max(1, round(math.sqrt(sites.shape[0]))))
+        else:
+            centres, list_of = sites.mean(axis=0, keepdims=True), np.zeros(sites.shape[0], np.int64)
+        return cls(scale, mean, axes, sites, centres, list_of, min(max(probe, 1), centres.shape[0]))
+
+    def project(self, model: ScaleModel, vol: np.ndarray, voxels: np.ndarray, view: int) -> np.ndarray:
+        """``(m, dims)``: each voxel's window projected."""
+        x = vol.ravel()[wrapped_coords(voxels, model.shape, model.offsets[view])] * self.scale
+        return (x - self.mean) @ self.axes
+
+    def searched(self, q: np.ndarray) -> np.ndarray:
+        """``(m, n)`` bool: the sites in each projection's *probe* lists with the nearest
+        centres (the lower list on a tie)."""
+        d = _squared_distances(q, self.centres)
+        lists = np.argsort(d, axis=1, kind="stable")[:, : self.probe]
+        chosen = np.zeros(d.shape, bool)
+        np.put_along_axis(chosen, lists, True, axis=1)
+        return chosen[:, self.list_of]
 
     def distances(self, model: ScaleModel, vol: np.ndarray, voxels: np.ndarray, view: int) -> np.ndarray:
-        """``(m, n)``: each voxel's projected distance to every site."""
-        x = vol.ravel()[wrapped_coords(voxels, model.shape, model.offsets[view])] * self.scale
-        q = (x - self.mean) @ self.axes
-        return (q**2).sum(axis=1)[:, None] - 2.0 * q @ self.sites.T + (self.sites**2).sum(axis=1)[None, :]
+        """``(m, n)``: each voxel's projected distance to every site it searches, inf to the rest."""
+        q = self.project(model, vol, voxels, view)
+        return np.where(self.searched(q), _squared_distances(q, self.sites), np.inf)
 
     def nearest(self, model: ScaleModel, vol: np.ndarray, voxels: np.ndarray, view: int, k: int) -> np.ndarray:
         """``(m, n)`` True on each voxel's *k* sites nearest by the projected distance (ties: any)."""
         return smallest(self.distances(model, vol, voxels, view), k)
+
+
+def _squared_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``(m, n)``: squared distances between the rows of *a* and *b*."""
+    return (a**2).sum(axis=1)[:, None] - 2.0 * a @ b.T + (b**2).sum(axis=1)[None, :]
+
+
+def site_lists(sites: np.ndarray, count: int, iterations: int = 10) -> tuple[np.ndarray, np.ndarray]:
+    """``(centres (C, dims), list_of (n,))``: the projected *sites* split by k-means (Lloyd's
+    *iterations* from *count* sites drawn with a fixed seed) into C <= *count* lists, none
+    empty, each centre the mean of its list's sites. An inverted file: a search reads the
+    few lists whose centres are nearest instead of every site."""
+    n = sites.shape[0]
+    count = min(count, n)
+    centres = sites[np.sort(np.random.default_rng(0).choice(n, count, replace=False))]
+    for _ in range(iterations + 1):
+        list_of = np.concatenate([np.argmin(_squared_distances(sites[i: i + 4096], centres), axis=1)
+                                  for i in range(0, n, 4096)])
+        counts = np.bincount(list_of, minlength=centres.shape[0])
+        sums = np.zeros_like(centres)
+        np.add.at(sums, list_of, sites)
+        kept = counts > 0
+        centres = sums[kept] / counts[kept, None]
+    remap = np.cumsum(kept) - 1
+    return centres, remap[list_of]
 
 
 def smallest(a: np.ndarray, k: int) -> np.ndarray:

@@ -402,20 +402,39 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
 
 #if PROJ_K > 0
 #define PDV ((PROJ_D + 7) / 8)
+/* Whether (a, s) comes before (b, t): the nearer, the lower index on a tie. */
+#define BEFORE(a, s, b, t) ((a) < (b) || ((a) == (b) && (s) < (t)))
+
+/* Squared distance between two projections in float8 rows of PDV. */
+inline float proj_distance(const float8 *q, __global const float8 *p)
+{
+    float8 acc = (float8)(0.0f);
+    for (int d = 0; d < PDV; ++d) {
+        float8 e = q[d] - p[d];
+        acc += e * e;
+    }
+    float4 h = acc.lo + acc.hi;
+    return (h.x + h.y) + (h.z + h.w);
+}
+
 /* The PROJ_K sites nearest to each item's window (items item0 <= i < n_items) by the distance
  * between projections on the exemplar windows' first PROJ_D principal axes
  * (clsolid.ml.pruned.ProjectedWindows): the window, each term times proj_scale (the fall-off's
  * square root; the temperatures left out), less proj_mean, times proj_axes [NR][PROJ_D]; its
- * squared distance to every site's projection proj_sites [site][PROJ_D] (both in float8 rows of
- * PDV, zero-padded); the PROJ_K least kept,
- * nearest first, the lower site first on a tie. Writes their windows (window_of), -1 past the
- * sites, to projected [item - item0][PROJ_K]. */
+ * squared distance to the projections of the sites it searches: those of the PROJ_P lists
+ * (of n_lists, centres proj_centres [list][PROJ_D]) whose centres are nearest, the lower list
+ * on a tie; list l holds the sites list_site [list_start[l] .. list_start[l + 1]), their
+ * projections in the same order in proj_sites [i][PROJ_D] (float8 rows of PDV, zero-padded).
+ * The PROJ_K least kept, nearest first, the lower site first on a tie. Writes their windows
+ * (window_of), -1 past the sites searched, to projected [item - item0][PROJ_K]. */
 __kernel void projected_nearest(__global const float *vol, int Z, int Y, int X,
                                 __global const int *voxels, int item0, int n_items, int n_views,
                                 __global const int *offsets, __global const float *proj_scale,
                                 __global const float *proj_mean, __global const float8 *proj_axes,
-                                __global const float8 *proj_sites, int n_sites,
-                                __global const int *window_of, __global int *projected)
+                                __global const float8 *proj_centres, int n_lists,
+                                __global const int *list_start, __global const int *list_site,
+                                __global const float8 *proj_sites, __global const int *window_of,
+                                __global int *projected)
 {
     int item = item0 + get_global_id(0);
     if (item >= n_items) return;
@@ -429,31 +448,46 @@ __kernel void projected_nearest(__global const float *vol, int Z, int Y, int X,
         float v = vol[shifted(z, y, x, Z, Y, X, off + 3 * r)] * proj_scale[r] - proj_mean[r];
         for (int d = 0; d < PDV; ++d) q[d] += v * proj_axes[r * PDV + d];
     }
+    float lbest[PROJ_P];   /* the lists to search, in the order lists are met: the lower first on a tie */
+    int lists[PROJ_P];
+    for (int j = 0; j < PROJ_P; ++j) {
+        lbest[j] = INFINITY;
+        lists[j] = -1;
+    }
+    for (int l = 0; l < n_lists; ++l) {
+        float a = proj_distance(q, proj_centres + (size_t)l * PDV);
+        if (!(a < lbest[PROJ_P - 1])) continue;
+        int j = PROJ_P - 1;
+        for (; j > 0 && lbest[j - 1] > a; --j) {
+            lbest[j] = lbest[j - 1];
+            lists[j] = lists[j - 1];
+        }
+        lbest[j] = a;
+        lists[j] = l;
+    }
     float best[PROJ_K];
     int site[PROJ_K];
     for (int j = 0; j < PROJ_K; ++j) {
         best[j] = INFINITY;
-        site[j] = -1;
+        site[j] = INT_MAX;
     }
-    for (int s = 0; s < n_sites; ++s) {
-        float8 acc = (float8)(0.0f);
-        for (int d = 0; d < PDV; ++d) {
-            float8 e = q[d] - proj_sites[(size_t)s * PDV + d];
-            acc += e * e;
+    for (int p = 0; p < PROJ_P; ++p) {
+        if (lists[p] < 0) continue;
+        for (int i = list_start[lists[p]]; i < list_start[lists[p] + 1]; ++i) {
+            float a = proj_distance(q, proj_sites + (size_t)i * PDV);
+            int s = list_site[i];
+            if (!BEFORE(a, s, best[PROJ_K - 1], site[PROJ_K - 1])) continue;
+            int j = PROJ_K - 1;
+            for (; j > 0 && BEFORE(a, s, best[j - 1], site[j - 1]); --j) {
+                best[j] = best[j - 1];
+                site[j] = site[j - 1];
+            }
+            best[j] = a;
+            site[j] = s;
         }
-        float4 h = acc.lo + acc.hi;
-        float a = (h.x + h.y) + (h.z + h.w);
-        if (!(a < best[PROJ_K - 1])) continue;   /* a tie keeps the lower site, met first */
-        int j = PROJ_K - 1;
-        for (; j > 0 && best[j - 1] > a; --j) {
-            best[j] = best[j - 1];
-            site[j] = site[j - 1];
-        }
-        best[j] = a;
-        site[j] = s;
     }
     for (int j = 0; j < PROJ_K; ++j)
-        projected[(size_t)(item - item0) * PROJ_K + j] = site[j] < 0 ? -1 : window_of[site[j]];
+        projected[(size_t)(item - item0) * PROJ_K + j] = site[j] == INT_MAX ? -1 : window_of[site[j]];
 }
 #endif
 
