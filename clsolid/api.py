@@ -309,7 +309,7 @@ def synthesize(
         ``prune_similar`` (8) windows most like each; identical windows count by their
         number), plus an unbiased estimate of the rest from ``prune_sample`` (64) sites
         drawn systematically; with ``prune_projected=D`` (0: off) also each voxel's
-        ``prune_projected_k`` (64) sites nearest by the distance projected on the exemplar
+        ``prune_projected_k`` (32) sites nearest by the distance projected on the exemplar
         windows' first D principal axes (squared differences only; README, Performance),
         searched in the ``prune_projected_probe`` (8) lists of sites (about sqrt(sites)
         lists, by k-means) whose centres are nearest (0: every site); a neighbourhood whose

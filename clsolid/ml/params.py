@@ -81,11 +81,10 @@ AUTO_PRUNED_LEVELS = 8
 # Grey exemplars with at least this many sites at the finest scale (about 110^2 pixels at
 # 11 x 11): "auto" prunes them too, with projected candidates (prune_projected=None resolves to
 # AUTO_PROJECTED_AXES). On the five grey gallery exemplars at 128^2 (into 48^3, seeds 1-2) that
-# scored as the exact sum or better (grass's patch 0.35/0.33 against 0.50/0.45; brick's right
-# autocorrelation 0.42 against 0.27 on one seed) in about a third of its time; the plain pruned
-# sum lost grass (0.62/0.54) and gravel's autocorrelation (1.06 against 0.68). At 64^2 the
-# projected sum missed hrtem's fringes and saved no time, so smaller grey exemplars keep the
-# exact sum (README, Performance).
+# scored as the exact sum (grass's patch 0.42/0.41 against 0.50/0.45) in about 40 % of its
+# time; the plain pruned sum lost grass (0.62/0.54) and gravel's autocorrelation (1.06
+# against 0.68). At 64^2 the projected sum missed hrtem's fringes and saved no time, so
+# smaller grey exemplars keep the exact sum (README, Performance).
 AUTO_PROJECTED_SITES = 10_000
 AUTO_PROJECTED_AXES = 24
 
@@ -155,7 +154,7 @@ class MLParams:
     # axes of the projected candidate search (0: off; None: by the exemplar, for_exemplar;
     # clsolid.ml.pruned.ProjectedWindows)
     prune_projected: int | None = None
-    prune_projected_k: int = 64  # its candidates a voxel and view
+    prune_projected_k: int = 32  # its candidates a voxel and view (README, Performance: 64 cost 1.6x, scored alike)
     prune_projected_probe: int = 8  # site lists it reads (0: every site; clsolid.ml.pruned.site_lists)
 
     def __post_init__(self):
