@@ -405,6 +405,20 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
 /* Whether (a, s) comes before (b, t): the nearer, the lower index on a tie. */
 #define BEFORE(a, s, b, t) ((a) < (b) || ((a) == (b) && (s) < (t)))
 
+/* Offers (a, id) to dist/ids [0..n), the n nearest offered so far, nearest first: kept if
+ * it comes BEFORE the last (ids INT_MAX: none yet). */
+inline void keep_nearest(float *dist, int *ids, int n, float a, int id)
+{
+    if (!BEFORE(a, id, dist[n - 1], ids[n - 1])) return;
+    int j = n - 1;
+    for (; j > 0 && BEFORE(a, id, dist[j - 1], ids[j - 1]); --j) {
+        dist[j] = dist[j - 1];
+        ids[j] = ids[j - 1];
+    }
+    dist[j] = a;
+    ids[j] = id;
+}
+
 /* Squared distance between two projections in float8 rows of PDV. */
 inline float proj_distance(const float8 *q, __global const float8 *p)
 {
@@ -448,44 +462,23 @@ __kernel void projected_nearest(__global const float *vol, int Z, int Y, int X,
         float v = vol[shifted(z, y, x, Z, Y, X, off + 3 * r)] * proj_scale[r] - proj_mean[r];
         for (int d = 0; d < PDV; ++d) q[d] += v * proj_axes[r * PDV + d];
     }
-    float lbest[PROJ_P];   /* the lists to search, in the order lists are met: the lower first on a tie */
+    float lbest[PROJ_P];   /* the lists to search */
     int lists[PROJ_P];
     for (int j = 0; j < PROJ_P; ++j) {
         lbest[j] = INFINITY;
-        lists[j] = -1;
+        lists[j] = INT_MAX;
     }
-    for (int l = 0; l < n_lists; ++l) {
-        float a = proj_distance(q, proj_centres + (size_t)l * PDV);
-        if (!(a < lbest[PROJ_P - 1])) continue;
-        int j = PROJ_P - 1;
-        for (; j > 0 && lbest[j - 1] > a; --j) {
-            lbest[j] = lbest[j - 1];
-            lists[j] = lists[j - 1];
-        }
-        lbest[j] = a;
-        lists[j] = l;
-    }
+    for (int l = 0; l < n_lists; ++l)
+        keep_nearest(lbest, lists, PROJ_P, proj_distance(q, proj_centres + (size_t)l * PDV), l);
     float best[PROJ_K];
     int site[PROJ_K];
     for (int j = 0; j < PROJ_K; ++j) {
         best[j] = INFINITY;
         site[j] = INT_MAX;
     }
-    for (int p = 0; p < PROJ_P; ++p) {
-        if (lists[p] < 0) continue;
-        for (int i = list_start[lists[p]]; i < list_start[lists[p] + 1]; ++i) {
-            float a = proj_distance(q, proj_sites + (size_t)i * PDV);
-            int s = list_site[i];
-            if (!BEFORE(a, s, best[PROJ_K - 1], site[PROJ_K - 1])) continue;
-            int j = PROJ_K - 1;
-            for (; j > 0 && BEFORE(a, s, best[j - 1], site[j - 1]); --j) {
-                best[j] = best[j - 1];
-                site[j] = site[j - 1];
-            }
-            best[j] = a;
-            site[j] = s;
-        }
-    }
+    for (int p = 0; p < PROJ_P && lists[p] != INT_MAX; ++p)
+        for (int i = list_start[lists[p]]; i < list_start[lists[p] + 1]; ++i)
+            keep_nearest(best, site, PROJ_K, proj_distance(q, proj_sites + (size_t)i * PDV), list_site[i]);
     for (int j = 0; j < PROJ_K; ++j)
         projected[(size_t)(item - item0) * PROJ_K + j] = site[j] == INT_MAX ? -1 : window_of[site[j]];
 }
