@@ -287,6 +287,15 @@ def test_auto_projects_grey_exemplars_from_ten_thousand_sites():
     assert MLParams(likelihood="pruned").for_exemplar(32, False, 0.0, (64, 64)).prune_projected == 0
 
 
+def test_records_older_than_the_site_lists_resume_searching_every_site():
+    """A checkpoint or sidecar written before ``prune_projected_probe`` existed searched every
+    site; read back, it must run as it ran, not with today's 8 lists."""
+    old = {k: v for k, v in MLParams(prune_projected=24).to_dict().items() if k != "prune_projected_probe"}
+    assert MLParams.from_dict(old).prune_projected_probe == 0
+    assert MLParams.from_dict(MLParams(prune_projected=24).to_dict()).prune_projected_probe == 8
+    assert MLParams.from_dict({**old, "prune_projected": 0}).prune_projected_probe == 8  # unused: today's
+
+
 def test_projected_windows_refuse_mismatch_distances():
     _, model = _model(np.random.default_rng(0).integers(0, 3, (14, 15)), neighborhood=5, distance="weighted")
     with pytest.raises(ValueError, match="squared differences"):

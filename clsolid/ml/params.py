@@ -282,8 +282,12 @@ class MLParams:
 
     @classmethod
     def from_dict(cls, d: dict) -> "MLParams":
-        """The parameters recorded by :meth:`to_dict` (e.g. ``SynthesisResult.params``); other keys are ignored."""
-        return cls(**{k: d[k] for k in cls.__dataclass_fields__ if k in d})
+        """The parameters recorded by :meth:`to_dict` (e.g. ``SynthesisResult.params``, a checkpoint's);
+        other keys are ignored. Keys a record predates take the value it ran with, not today's default."""
+        kept = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
+        if kept.get("prune_projected") and "prune_projected_probe" not in kept:
+            kept["prune_projected_probe"] = 0  # written before the site lists: every site was searched
+        return cls(**kept)
 
     @property
     def relaxation_code(self) -> int:
