@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import clsolid
-from clsolid.errors import InputError
+from clsolid.errors import DeviceMemoryError, InputError
 from clsolid.ml import pruned
 from clsolid.ml.model import build_scale
 from clsolid.ml.opencl import CLBackend
@@ -374,3 +374,32 @@ def test_projected_candidates_run_is_reproducible_and_tiles_alike(device):
     assert np.array_equal(one, clsolid.synthesize(ex, (12, 12, 12), **kw))
     assert np.array_equal(one, clsolid.synthesize(ex, (12, 12, 12), tile=7, **kw))
     assert not np.array_equal(one, clsolid.synthesize(ex, (12, 12, 12), **{**kw, "prune_projected": 0}))
+
+
+@pytest.mark.parametrize("projected", [0, 6])
+def test_memory_check_counts_the_pruned_tables(device, small_labels, monkeypatch, projected):
+    """The pruned sum's buffers are counted before they are allocated, each at least as large
+    as what is then allocated, and they can make a run not fit."""
+    import pyopencl as cl
+
+    params, model = _model(small_labels, neighborhood=5, likelihood="pruned", falloff=2.0,
+                           prune_projected=projected, prune_projected_probe=3)
+    backend = CLBackend(device)
+    plain = backend.buffer_sizes(model, model.labels.size)
+    sizes = backend.buffer_sizes(model, model.labels.size, None, params)
+    assert {k: sizes[k] for k in plain} == plain
+    assert ("projected sites" in sizes) == bool(projected)
+    vol, temp, sources = _state(model)
+    backend.start_scale(model, vol, temp, params, sources=sources)
+    w = backend.windows
+    allocated = {"pruned windows": w[2].size, "pruned window tables": sum(b.size for b in (w[0], w[1], *w[3:6])),
+                 "pruned flags": backend.flags_buf.size, "projected candidates": backend.projected_out.size}
+    if projected:
+        allocated["projected sites"] = sum(b.size for b in backend.projection if isinstance(b, cl.Buffer)) - w[0].size
+    assert set(allocated) == set(sizes) - set(plain)
+    for name, nbytes in allocated.items():
+        assert 0 < nbytes <= sizes[name], name
+    monkeypatch.setattr(type(device), "global_mem", property(lambda self: sum(plain.values())))
+    backend.check_memory(model)  # the exact sum's buffers alone fit
+    with pytest.raises(DeviceMemoryError, match="all buffers together"):
+        backend.check_memory(model, None, params)

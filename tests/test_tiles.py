@@ -141,13 +141,13 @@ def test_memory_is_checked_per_tile(device, monkeypatch):
     with pytest.raises(DeviceMemoryError, match=r"tile=(\d+) \(--tile \1\) is the largest that fits") as info:
         clsolid.synthesize(binary, (64, 64, 64), **kw)
     edge = int(str(info.value).split("tile=")[1].split(" ")[0])
-    params = MLParams(neighborhood=5, scales=2, levels=2)
+    params = MLParams(neighborhood=5, scales=2, levels=2).for_exemplar(2, True, 0.0, binary.shape)
     models = [build_scale(binary, (64, 64, 64), params, level) for level in (1, 0)]
     engine = CLBackend(device)
-    assert largest_tile(engine, models) == edge
-    check_tile(engine, models, edge)  # fits
+    assert largest_tile(engine, models, params) == edge  # the pruned sum's tables counted
+    check_tile(engine, models, edge, params)  # fits
     with pytest.raises(DeviceMemoryError, match=f"tile={edge + 1} the device holds"):
-        check_tile(engine, models, edge + 1)
+        check_tile(engine, models, edge + 1, params)
     with pytest.raises(DeviceMemoryError, match="with tile=64 the device holds .* use a smaller tile"):
         clsolid.synthesize(binary, (64, 64, 64), tile=64, **kw)
 

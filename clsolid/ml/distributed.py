@@ -107,10 +107,11 @@ def device_name(spec: str | None, options: dict) -> str:
         return _engine(spec, options).name
 
 
-def check_task(spec: str | None, options: dict, models: list[ScaleModel], edge: int) -> None:
+def check_task(spec: str | None, options: dict, models: list[ScaleModel], edge: int,
+               params: MLParams | None = None) -> None:
     """A Dask task: :func:`clsolid.ml.tiled.check_tile` on this worker's device."""
     with _LOCK:
-        check_tile(_engine(spec, options), models, edge)
+        check_tile(_engine(spec, options), models, edge, params)
 
 
 def init_task(spec: str | None, options: dict, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
@@ -164,9 +165,9 @@ class DaskTiles:
                    for w in self.workers]
         return self.client.gather(futures)
 
-    def prepare(self, models: list[ScaleModel], edge: int) -> None:
-        """Refuse tiles whose buffers exceed some worker's device (checked there)."""
-        self._on_each(check_task, self.spec, self.options, models, edge)
+    def prepare(self, models: list[ScaleModel], edge: int, params: MLParams | None = None) -> None:
+        """Refuse tiles whose buffers (for a run of *params*) exceed some worker's device (checked there)."""
+        self._on_each(check_task, self.spec, self.options, models, edge, params)
 
     def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
         return self.client.submit(init_task, self.spec, self.options, tuple(shape), seed, pixels,

@@ -256,7 +256,7 @@ def run_ml(
     check_exemplar_fits(labels_img.shape, params)
     levels = list(range(params.scales - 1, -1, -1))
     models = [build_scale(labels_img, shape, params, lv) for lv in levels]
-    backend.prepare(models)  # refuses, before allocating, what the device cannot hold
+    backend.prepare(models, params)  # refuses, before allocating, what the device cannot hold
     clock = _Clock(models, params)
     base = backend.init_volume(shape, seed, models[0].exemplar)
     resynth = params.inherited == "resynthesize"

@@ -89,15 +89,17 @@ class CLBackend:
         self.exact_visits = self.pruned_visits = 0  # voxel visits by sum, in the pruned mode
 
     # -- memory ------------------------------------------------------------------------
-    def buffer_sizes(self, model: ScaleModel, n_labels: int, block=None) -> dict[str, int]:
+    def buffer_sizes(self, model: ScaleModel, n_labels: int, block=None,
+                     params: MLParams | None = None) -> dict[str, int]:
         """Bytes of every device buffer a scale needs, its state (volume, temperatures,
         sources) held for a *block* ``(Z, Y, X)``: the whole volume (default), or one tile
-        with its halo (:mod:`clsolid.ml.tiled`)."""
+        with its halo (:mod:`clsolid.ml.tiled`). With *params* of a pruned run, its tables too,
+        counted as if every site's window were distinct (they are found only when built)."""
         n_vox = int(np.prod(model.shape if block is None else block))
         views, nr = model.offsets.shape[:2]
         chunks = int(np.sum(-(-np.bincount(np.unique(model.centres, return_inverse=True)[1]) // self.vw)))
         batch = min(self.max_batch, n_vox)
-        return {
+        sizes = {
             "volume": n_vox * _F4,
             "temperature": n_vox * _F4,
             "exemplar patches": chunks * nr * self.vw * _F4,
@@ -107,11 +109,14 @@ class CLBackend:
             "balance scores": n_score_slots(model.shape) * n_labels * _F4,
             "sources": views * n_vox * _F4,
         }
+        if params is not None and params.likelihood == "pruned":
+            sizes.update(_pruned_sizes(model, params, batch))
+        return sizes
 
-    def check_memory(self, model: ScaleModel, block=None) -> None:
+    def check_memory(self, model: ScaleModel, block=None, params: MLParams | None = None) -> None:
         """Refuse (:class:`~clsolid.errors.DeviceMemoryError`), before allocating anything, a
         scale whose buffers (see :meth:`buffer_sizes`) exceed the device limits."""
-        sizes = self.buffer_sizes(model, model.labels.size, block)
+        sizes = self.buffer_sizes(model, model.labels.size, block, params)
         for name, nbytes in sizes.items():
             if nbytes > self.device.max_alloc:
                 raise DeviceMemoryError(name, nbytes, self.device.max_alloc)
@@ -119,14 +124,14 @@ class CLBackend:
         if total > self.device.global_mem:
             raise DeviceMemoryError("all buffers together", total, self.device.global_mem, "global_mem_size")
 
-    def prepare(self, models: list[ScaleModel]) -> None:
-        """Refuse, before allocating anything, a run whose buffers exceed the device limits;
-        where tiles would fit, the error says which (``tile=``, ``--tile``)."""
+    def prepare(self, models: list[ScaleModel], params: MLParams | None = None) -> None:
+        """Refuse, before allocating anything, a run (of *params*) whose buffers exceed the
+        device limits; where tiles would fit, the error says which (``tile=``, ``--tile``)."""
         try:
             for model in models:
-                self.check_memory(model)
+                self.check_memory(model, None, params)
         except DeviceMemoryError as exc:
-            edge = largest_tile(self, models)
+            edge = largest_tile(self, models, params)
             if edge is None:  # the exemplar's tables alone are too large
                 raise
             raise exc.advised(f"synthesize it in tiles: tile={edge} (--tile {edge}) is the largest that fits, "
@@ -197,7 +202,7 @@ class CLBackend:
 
         n_labels = model.labels.size
         block = tuple(model.shape if block is None else block)
-        self.check_memory(model, block)
+        self.check_memory(model, block, params)
         self.model, self.params = model, params
         self.capacity = int(np.prod(block))
         canon = source_of_site(model)
@@ -482,6 +487,24 @@ class CLBackend:
                         np.int32(n_labels), self.kfactor, buf)
         cl.enqueue_copy(self.device.queue, out, buf)
         return out.reshape(voxels.size, -1, n_labels)[rows].transpose(1, 0, 2)
+
+
+def _pruned_sizes(model: ScaleModel, params: MLParams, batch: int) -> dict[str, int]:
+    """Bytes of the pruned sum's buffers (:meth:`CLBackend._start_pruned`), at most: every
+    site's window taken as distinct, the site lists as many as :func:`~clsolid.ml.pruned.site_lists` makes."""
+    views, nr = model.offsets.shape[:2]
+    n = model.n_sites
+    sizes = {"pruned windows": n * -(-nr // 8) * 8 * _F4,
+             # window_of, similar, group, log count, source
+             "pruned window tables": n * (params.prune_similar + 4) * _F4,
+             "pruned flags": batch * _F4}
+    if params.prune_projected:
+        dims = -(-min(params.prune_projected, nr) // 8) * 8
+        lists = max(1, round(float(np.sqrt(n)))) if params.prune_projected_probe else 1
+        sizes["projected sites"] = (n * (dims + 1) + lists * (dims + 1) + 1 + nr * (dims + 2)) * _F4
+    k = params.prune_projected_k if params.prune_projected else 0
+    sizes["projected candidates"] = max(1, batch * views * k) * _F4
+    return sizes
 
 
 def _float8_rows(a: np.ndarray) -> np.ndarray:

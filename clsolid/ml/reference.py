@@ -188,7 +188,7 @@ class ReferenceBackend:
 
     name = "numpy-float64-reference"
 
-    def prepare(self, models) -> None:
+    def prepare(self, models, params=None) -> None:
         """Nothing to reserve on the host."""
 
     def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:

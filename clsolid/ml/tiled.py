@@ -51,14 +51,14 @@ def scale_tiling(model: ScaleModel, edge: int) -> Tiling:
     return Tiling(model.shape, edge, halo_width(model))
 
 
-def check_tile(engine: Any, models: list[ScaleModel], edge: int) -> None:
+def check_tile(engine: Any, models: list[ScaleModel], edge: int, params: MLParams | None = None) -> None:
     """Refuse (:class:`~clsolid.errors.DeviceMemoryError`), before allocating, tiles of *edge*
     whose buffers exceed the device's limits at some scale of *models* (the *engine*'s
-    ``check_memory``); the message names the tile and what to do."""
+    ``check_memory``, with the run's *params*); the message names the tile and what to do."""
     for model in models:
         block = scale_tiling(model, edge).largest_block
         try:
-            engine.check_memory(model, block)
+            engine.check_memory(model, block, params)
         except DeviceMemoryError as exc:
             raise exc.advised(
                 f"with tile={edge} the device holds {'x'.join(map(str, block))} voxels (a tile and its halo "
@@ -66,13 +66,13 @@ def check_tile(engine: Any, models: list[ScaleModel], edge: int) -> None:
                 "(tile=, --tile)") from None
 
 
-def largest_tile(engine: Any, models: list[ScaleModel]) -> int | None:
-    """The largest tile edge whose buffers fit the device at every scale of *models*; None
-    where none does (the exemplar's tables alone are too large)."""
+def largest_tile(engine: Any, models: list[ScaleModel], params: MLParams | None = None) -> int | None:
+    """The largest tile edge whose buffers fit the device at every scale of *models* (of a
+    run of *params*); None where none does (the exemplar's tables alone are too large)."""
 
     def fits(edge: int) -> bool:
         try:
-            check_tile(engine, models, edge)
+            check_tile(engine, models, edge, params)
         except DeviceMemoryError:
             return False
         return True
@@ -140,8 +140,8 @@ class LocalTiles:
     def __init__(self, engine: Any) -> None:
         self.engine, self.name = engine, engine.name
 
-    def prepare(self, models: list[ScaleModel], edge: int) -> None:
-        check_tile(self.engine, models, edge)
+    def prepare(self, models: list[ScaleModel], edge: int, params: MLParams | None = None) -> None:
+        check_tile(self.engine, models, edge, params)
 
     def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
         return self.engine.init_volume(shape, seed, pixels)
@@ -177,9 +177,10 @@ class TiledBackend:
         self.name = self.runner.name
         self.exact_visits = self.pruned_visits = 0  # voxel visits by sum, in the pruned mode
 
-    def prepare(self, models: list[ScaleModel]) -> None:
-        """Refuse, before allocating anything, tiles whose buffers exceed the device limits."""
-        self.runner.prepare(models, self.tile)
+    def prepare(self, models: list[ScaleModel], params: MLParams | None = None) -> None:
+        """Refuse, before allocating anything, tiles whose buffers (for a run of *params*)
+        exceed the device limits."""
+        self.runner.prepare(models, self.tile, params)
 
     def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
         """The random start (see :meth:`clsolid.ml.opencl.CLBackend.init_volume`)."""
