@@ -35,7 +35,7 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
                "prune_similar", "prune_sample", "prune_min_weight", "prune_projected",
-               "prune_projected_k", "prune_projected_probe", "falloff")
+               "prune_projected_k", "prune_projected_probe", "prune_projected_sweeps", "falloff")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
 _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
@@ -312,7 +312,8 @@ def synthesize(
         ``prune_projected_k`` (32) sites nearest by the distance projected on the exemplar
         windows' first D principal axes (squared differences only; README, Performance),
         searched in the ``prune_projected_probe`` (8) lists of sites (about sqrt(sites)
-        lists, by k-means) whose centres are nearest (0: every site); a neighbourhood whose
+        lists, by k-means) whose centres are nearest (0: every site), in the first
+        ``prune_projected_sweeps`` (1) sweeps of each scale (0: every sweep); a neighbourhood whose
         mean (1 - t)^2 is below ``prune_min_weight`` (default 0: none) gets the exact sum
         (``clsolid.ml.pruned``). ``"auto"`` (default) prunes categorical exemplars (binary or
         segmented: their own values kept, at most 8 of them) and grey ones with at least

@@ -179,6 +179,9 @@ def _add_synth(sub) -> None:
     p.add_argument("--prune-projected-probe", type=int, default=d.prune_projected_probe, metavar="P",
                    help="pruned: search only the P lists of sites (about sqrt(sites) lists) whose centres are "
                         "nearest to the voxel's projection (default %(default)s; 0: every site)")
+    p.add_argument("--prune-projected-sweeps", type=int, default=d.prune_projected_sweeps, metavar="N",
+                   help="pruned: search projected candidates in the first N sweeps of each scale only "
+                        "(default %(default)s; 0: every sweep)")
     p.add_argument("--prune-min-weight", type=float, default=d.prune_min_weight,
                    help="pruned: a neighbourhood whose mean (1 - t)^2 is below this gets the exact sum "
                         "(default %(default)s: never)")
@@ -321,7 +324,7 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
             "prune_similar", "prune_sample", "prune_min_weight", "prune_projected", "prune_projected_k",
-            "prune_projected_probe", "falloff", "tile", "scheduler", "workers", "indices",
+            "prune_projected_probe", "prune_projected_sweeps", "falloff", "tile", "scheduler", "workers", "indices",
             "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "parent_weight", "init", "rule", "order", "causal", "histogram",
             "candidates", "specify", "search", "exact_passes", "site_map", "source_map")
@@ -392,6 +395,7 @@ def _ml_options(args) -> dict:
                    distance=args.distance, prune_similar=args.prune_similar, prune_sample=args.prune_sample,
                    prune_min_weight=args.prune_min_weight, prune_projected=args.prune_projected,
                    prune_projected_k=args.prune_projected_k, prune_projected_probe=args.prune_projected_probe,
+                   prune_projected_sweeps=args.prune_projected_sweeps,
                    falloff=args.falloff)
     if args.tile is not None:
         options["tile"] = args.tile

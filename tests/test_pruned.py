@@ -236,7 +236,8 @@ def test_pruned_run_resumes_identically(tmp_path, device, name):
                                  dict(prune_min_weight=1.5), dict(prune_min_weight="x"), dict(prune_sample=-1),
                                  dict(prune_sample=5000), dict(prune_projected=-1), dict(prune_projected=65),
                                  dict(prune_projected_k=0), dict(prune_projected=True),
-                                 dict(prune_projected_probe=-1), dict(prune_projected_probe=2.0)])
+                                 dict(prune_projected_probe=-1), dict(prune_projected_probe=2.0),
+                                 dict(prune_projected_sweeps=-1), dict(prune_projected_sweeps=None)])
 def test_bad_pruned_parameters_are_refused(bad):
     with pytest.raises(InputError, match=next(iter(bad))):
         MLParams(**bad)
@@ -294,6 +295,9 @@ def test_records_older_than_the_site_lists_resume_searching_every_site():
     assert MLParams.from_dict(old).prune_projected_probe == 0
     assert MLParams.from_dict(MLParams(prune_projected=24).to_dict()).prune_projected_probe == 8
     assert MLParams.from_dict({**old, "prune_projected": 0}).prune_projected_probe == 8  # unused: today's
+    older = {k: v for k, v in old.items() if k != "prune_projected_sweeps"}
+    assert MLParams.from_dict(older).prune_projected_sweeps == 0  # before it, every sweep searched
+    assert MLParams.from_dict(MLParams(prune_projected=24).to_dict()).prune_projected_sweeps == 1
 
 
 def test_projected_windows_refuse_mismatch_distances():
@@ -356,6 +360,28 @@ def test_projected_candidates_are_the_references(device, small_labels, probe):
     want = np.stack([ref.pruning.projected_windows(ref.vol, voxels, v) for v in range(2)], axis=1)
     assert (np.sort(got, axis=2) == np.sort(want, axis=2)).all(axis=2).mean() > 0.98  # float32 near-ties aside
     assert (got >= 0).all()
+
+
+@pytest.mark.parametrize("every", [0, 2])
+def test_projected_candidates_only_in_the_first_sweeps(device, small_labels, every):
+    """With ``prune_projected_sweeps=N`` the sweeps after the first N of a scale take no
+    projected candidates, kernel and reference alike; with 0 every sweep takes them."""
+    from clsolid.core.philox import relax_tag
+
+    params, model = _model(small_labels, neighborhood=5, likelihood="pruned", prune_projected=8,
+                           prune_projected_k=20, prune_projected_sweeps=every)
+    plain = MLParams(**{**params.to_dict(), "prune_projected": 0})
+    vol, temp, sources = _state(model, seed=4)
+    voxels = np.flatnonzero(model.colour.ravel() == 2)
+    for sweep in (1, 2, 3):
+        cl_b, ref = _backends(device, model, params, vol, temp, sources)
+        without = ReferenceBackend()
+        without.start_scale(model, vol, temp, plain, sources=sources)
+        for b in (cl_b, ref, without):
+            b.start_sweep(5, relax_tag(0, sweep), 1.0, np.zeros(model.labels.size))
+        want = ref.lcpdf(voxels)
+        np.testing.assert_allclose(cl_b.lcpdf(voxels), want, atol=2e-3 * max(1.0, np.abs(want).max() / 100))
+        assert np.allclose(want, without.lcpdf(voxels), atol=1e-9) == (every and sweep > every)
 
 
 def test_projected_candidates_need_squared_differences(small_labels):

@@ -35,6 +35,11 @@ def relax_tag(level: int, sweep: int) -> int:
     return (PURPOSE_RELAX << 28) | (level << 20) | sweep
 
 
+def tag_sweep(tag: int) -> int:
+    """The sweep (from 1 within its scale) of relaxation tag *tag* (:func:`relax_tag`)."""
+    return tag & 0xFFFFF
+
+
 def sample_tag(tag: int) -> int:
     """The tag of the pruned likelihood's site sample in the sweep of relaxation tag *tag*:
     the same level and sweep, purpose :data:`PURPOSE_SAMPLE`."""

@@ -309,6 +309,8 @@ class CLBackend:
         cl.enqueue_copy(self.device.queue, self.bias, padded)
         key = seed_key(seed)
         self.sample_key = (np.uint32(key[0]), np.uint32(key[1]), np.uint32(sample_tag(tag)))
+        # the projected candidates parzen_candidates reads this sweep (projected_nearest runs if any)
+        self.n_projected = self.params.prune_projected_k if pruned.projects(self.params, tag) else 0
         self.sweep_args = (np.int32(self.params.relaxation_code), self.bias, np.uint32(key[0]), np.uint32(key[1]),
                            np.uint32(tag), np.float32(t_in))
 
@@ -342,7 +344,7 @@ class CLBackend:
             self.pruned_visits += voxels.size - n_exact
         if n_exact < voxels.size:
             items = (self._global(n_items - n_exact * views, self.item_local),)
-            if self.projection is not None:
+            if self.projection is not None and self.n_projected:
                 self.k["projected_nearest"](
                     q, items, (self.item_local,), self.vol_buf, *self._shape_args(), self.vox_buf,
                     np.int32(n_exact * views), np.int32(n_items), np.int32(views), self.offsets, *self.projection,
@@ -351,7 +353,7 @@ class CLBackend:
                 q, items, (self.item_local,),
                 self.vol_buf, self.temp_buf, *self._shape_args(), *self.placement, self.vox_buf,
                 np.int32(n_exact * views), np.int32(n_items), np.int32(views), self.offsets, *self.coherence,
-                self.src, np.int32(self.n_block), *self.windows, self.projected_out,
+                self.src, np.int32(self.n_block), *self.windows, self.projected_out, np.int32(self.n_projected),
                 np.int32(min(self.params.prune_sample, m.n_sites)), *self.sample_key,
                 np.int32(self.n_groups), self.kfactor, self.sums)
         return n_items

@@ -156,6 +156,8 @@ class MLParams:
     prune_projected: int | None = None
     prune_projected_k: int = 32  # its candidates a voxel and view (README, Performance: 64 cost 1.6x, scored alike)
     prune_projected_probe: int = 8  # site lists it reads (0: every site; clsolid.ml.pruned.site_lists)
+    # the first sweeps of each scale that search them (0: every sweep; README, Performance)
+    prune_projected_sweeps: int = 1
 
     def __post_init__(self):
         k = int_in("neighborhood", self.neighborhood, 3, 31)
@@ -223,6 +225,7 @@ class MLParams:
             int_in("prune_projected", self.prune_projected, 0, 64)
         int_in("prune_projected_k", self.prune_projected_k, 1, 256)
         int_in("prune_projected_probe", self.prune_projected_probe, 0, 1024)
+        int_in("prune_projected_sweeps", self.prune_projected_sweeps, 0, 1 << 20)
         if not (_real(self.prune_min_weight) and 0 <= self.prune_min_weight <= 1):
             raise InputError(f"prune_min_weight={self.prune_min_weight!r} must be a number in [0, 1] (the "
                              "mean (1 - t)^2 of a neighbourhood below which the pruned mode sums exactly)")
@@ -287,6 +290,8 @@ class MLParams:
         kept = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
         if kept.get("prune_projected") and "prune_projected_probe" not in kept:
             kept["prune_projected_probe"] = 0  # written before the site lists: every site was searched
+        if kept.get("prune_projected") and "prune_projected_sweeps" not in kept:
+            kept["prune_projected_sweeps"] = 0  # written before it: every sweep searched
         return cls(**kept)
 
     @property

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.philox import bounded, sample_tag, voxel_words
+from ..core.philox import bounded, sample_tag, tag_sweep, voxel_words
 from ..errors import InputError
 from .model import ScaleModel, view_offsets, wrapped_coords
 from .params import VIEW_AXES, MLParams
@@ -232,6 +232,15 @@ def needs_exact(own_sources: np.ndarray, weights: np.ndarray, min_weight: float,
     return exact | np.any(own_sources < 0, axis=0) if sample == 0 else exact
 
 
+def projects(params: MLParams, tag: int) -> bool:
+    """Whether the sweep of relaxation *tag* searches projected candidates: with
+    ``prune_projected``, in the first ``prune_projected_sweeps`` sweeps of each scale (0: every
+    sweep). Later sweeps find the nearest windows among the coherence candidates, whose
+    sources the projected search left."""
+    n = params.prune_projected_sweeps
+    return bool(params.prune_projected) and (n == 0 or tag_sweep(tag) <= n)
+
+
 def may_need_exact(params: MLParams) -> bool:
     """Whether any voxel can need the exact sum under *params* (:func:`needs_exact`): not with a
     sample and no weight threshold, the defaults, so a run need not look."""
@@ -271,7 +280,7 @@ class Pruning:
         m = self.model
         nb = wrapped_coords(voxels, m.shape, self.voxel_offsets[view])
         sampled = sample_sites(seed, tag, voxels, m.shape, view, m.n_sites, self.params.prune_sample)
-        extra = None if self.projected is None else self.projected_windows(vol, voxels, view)
+        extra = self.projected_windows(vol, voxels, view) if projects(self.params, tag) else None
         return term_weights(self.table, src[view][nb], self.exemplar_offsets[view], sampled, extra)
 
     def projected_windows(self, vol: np.ndarray, voxels: np.ndarray, view: int) -> np.ndarray:

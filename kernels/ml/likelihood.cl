@@ -262,6 +262,9 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
 
 
 #define NRV ((NR + 7) / 8)   /* neighbours per pruned-sum row, in float8 vectors */
+/* A term below exp(UNSEEN) = 2.8e-8 of its group's largest is under half a float32 ulp of
+ * the group's sum (at least 1), so adding it would leave the sum as it is: it is skipped. */
+#define UNSEEN (-17.4f)
 #ifndef PROJ_K
 #define PROJ_K 0   /* the projected candidates an item takes (prune_projected_k; 0: none) */
 #endif
@@ -301,6 +304,7 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
                                 __global const int *win_group, __global const float *win_logc,
                                 __global const int *win_source, int grid_rows, int grid_cols,
                                 __global const int *projected,   /* [item - item0][PROJ_K] windows, -1: none */
+                                int n_projected,   /* of them to read: PROJ_K, or 0 in a sweep without */
                                 int n_sample, uint key0, uint key1, uint tag,
                                 int n_groups, float k, __global float *log_sums)
 {
@@ -334,7 +338,7 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
             cand[nc++] = wnd;
         }
     }
-    for (int j = 0; j < PROJ_K; ++j) {   /* the projected candidates (projected_nearest), each once */
+    for (int j = 0; j < n_projected; ++j) {   /* the projected candidates (projected_nearest), each once */
         int wnd = projected[(size_t)(item - item0) * PROJ_K + j];
         if (wnd < 0) continue;
         int h = slot_of(seen, wnd);
@@ -366,14 +370,27 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
         start = mul_hi(philox4x32(ctr, key).v[view], (uint)n_sites);
     }
     float log_rest = log((float)n_sites / (float)n_sample);
+    /* The j-th sample site is (start + floor(j n_sites / n_sample)) mod n_sites, stepped
+     * without dividing: the step's whole part, and its remainder carried. */
+    int step = n_sample ? n_sites / n_sample : 0, carry = n_sample ? n_sites % n_sample : 0;
+    int site = start, owed = 0;
     for (int i = 0; i < nc + n_sample; ++i) {
         int wnd;
         float e0 = 0.0f;
         if (i < nc) {
             wnd = cand[i];
         } else {   /* the sample: the site's window unless it is a candidate */
-            int s = (int)((start + (long)(i - nc) * n_sites / n_sample) % n_sites);
+            int s = site;
+            site += step;
+            owed += carry;
+            if (owed >= n_sample) {
+                owed -= n_sample;
+                ++site;
+            }
+            if (site >= n_sites) site -= n_sites;
             wnd = window_of[s];
+            /* the next one's row, on its way while this one is summed (a sampled row is seldom cached) */
+            prefetch(win_patches + (size_t)window_of[site] * NRV * 8, NRV * 8);
             if (seen[slot_of(seen, wnd)] == wnd) continue;
             e0 = log_rest;
         }
@@ -391,7 +408,7 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
         if (e > gmax[g]) {
             gsum[g] = gsum[g] * exp(gmax[g] - e) + 1.0f;
             gmax[g] = e;
-        } else {
+        } else if (e - gmax[g] > UNSEEN) {
             gsum[g] += exp(e - gmax[g]);
         }
     }
@@ -531,8 +548,13 @@ inline void view_logf(__global const float *ls, int n_groups, __global const flo
     float M = vmax_all(e, NGV);
     for (int j = 0; j < NGV; ++j) e[j] = exp(e[j] - (floatv)(M));
     const float *es = (const float *)e;
+    /* the groups with terms: an empty one (-inf; most, in a pruned sum) adds exactly nothing */
+    int near[NGMAX], n_near = 0;
+    for (int g = 0; g < n_groups; ++g)
+        if (ls[g] > -INFINITY) near[n_near++] = g;
     for (int j = 0; j < NLV; ++j) f[j] = (floatv)(0.0f);
-    for (int g = 0; g < n_groups; ++g) {
+    for (int i = 0; i < n_near; ++i) {
+        int g = near[i];
         __global const floatv *row = (__global const floatv *)(kern + g * NLV * VW);
         for (int j = 0; j < NLV; ++j) f[j] += es[g] * row[j];
     }
@@ -545,12 +567,14 @@ inline void view_logf(__global const float *ls, int n_groups, __global const flo
             fs[l] = M + log(s);
         } else {
             float lam = labels[l], mx = -INFINITY;
-            for (int g = 0; g < n_groups; ++g) {
+            for (int i = 0; i < n_near; ++i) {
+                int g = near[i];
                 float x = ls[g] - KDIST(k, lam, gval[g]);
                 mx = x > mx ? x : mx;
             }
             s = 0.0f;
-            for (int g = 0; g < n_groups; ++g) {
+            for (int i = 0; i < n_near; ++i) {
+                int g = near[i];
                 float x = ls[g] - KDIST(k, lam, gval[g]) - mx;
                 if (x > NEGLIGIBLE) s += exp(x);
             }
