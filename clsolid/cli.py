@@ -167,7 +167,8 @@ def _add_synth(sub) -> None:
                         "same, on two), squared for grey ones; the search methods take auto, squared or weighted "
                         "(their finest scale's squares; auto: weighted on 3 to 8 phases for kopf)")
     p.add_argument("--prune-similar", type=int, default=d.prune_similar,
-                   help="pruned: windows taken per source, itself included (default %(default)s)")
+                   help="pruned: windows taken per source, itself included (default: 1 with projected "
+                        "candidates, else 8)")
     p.add_argument("--prune-sample", type=int, default=d.prune_sample,
                    help="pruned: sites sampled to estimate the rest of the sum (default %(default)s)")
     p.add_argument("--prune-projected", type=int, default=d.prune_projected, metavar="AXES",

@@ -285,6 +285,11 @@ def test_auto_projects_grey_exemplars_from_ten_thousand_sites():
     assert (given.likelihood, given.prune_projected) == ("pruned", 0)
     exact = MLParams(likelihood="exact").for_exemplar(32, False, 0.0, (side, side))
     assert (exact.likelihood, exact.prune_projected) == ("exact", 0)
+    # similar windows a source: fewer with projected candidates, unless given
+    assert MLParams().for_exemplar(32, False, 0.0, (side, side)).prune_similar == 1
+    assert MLParams().for_exemplar(3, True, 0.0, (side, side)).prune_similar == 8
+    assert MLParams(prune_similar=5).for_exemplar(32, False, 0.0, (side, side)).prune_similar == 5
+    assert (MLParams().n_similar, MLParams(prune_projected=4).n_similar) == (8, 1)
     assert MLParams(likelihood="pruned").for_exemplar(32, False, 0.0, (64, 64)).prune_projected == 0
 
 
@@ -369,7 +374,7 @@ def test_projected_candidates_only_in_the_first_sweeps(device, small_labels, eve
     from clsolid.core.philox import relax_tag
 
     params, model = _model(small_labels, neighborhood=5, likelihood="pruned", prune_projected=8,
-                           prune_projected_k=20, prune_projected_sweeps=every)
+                           prune_projected_k=20, prune_projected_sweeps=every, prune_similar=4)
     plain = MLParams(**{**params.to_dict(), "prune_projected": 0})
     vol, temp, sources = _state(model, seed=4)
     voxels = np.flatnonzero(model.colour.ravel() == 2)

@@ -111,7 +111,7 @@ def main(argv: list[str] | None = None) -> None:
     options = {k: json.loads(v) for k, v in (s.split("=", 1) for s in args.set)}
     params = MLParams(**{"likelihood": "pruned", **options})
     device = select_device(args.device)
-    print(f"{args.shape}^3, seed 1, likelihood='pruned', prune_similar={params.prune_similar}, "
+    print(f"{args.shape}^3, seed 1, likelihood='pruned', prune_similar={params.n_similar}, "
           f"prune_min_weight={params.prune_min_weight}; {device.name}")
     for name in args.names:
         image = builtin_exemplar(name) if name in ("brick", "grass", "gravel") else gallery_exemplar(name, 64)

@@ -143,7 +143,7 @@ class CLBackend:
         views, nr = model.offsets.shape[:2]
         return programs.build(self.device, "ml/likelihood.cl", {
             "NR": nr, "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
-            "NS": self.params.prune_similar if self.params.likelihood == "pruned" else 1,
+            "NS": self.params.n_similar if self.params.likelihood == "pruned" else 1,
             **({"PROJ_K": self.params.prune_projected_k, "PROJ_D": projected.axes.shape[1], "PROJ_P": projected.probe}
                if projected is not None else {}),
             "MISMATCH": 2 if model.costs is not None else int(model.mismatch),
@@ -273,7 +273,7 @@ class CLBackend:
 
         model, table = pruning.model, pruning.table
         first = table.first_site
-        ns = pruning.params.prune_similar  # the kernel reads NS columns: pad a small exemplar's table
+        ns = pruning.params.n_similar  # the kernel reads NS columns: pad a small exemplar's table
         similar = np.concatenate([table.similar, np.repeat(table.similar[:, :1], ns - table.similar.shape[1], 1)], 1)
         group = np.searchsorted(gvals, model.centres[first].astype(np.float32)).astype(np.int32)
         nr = model.patches.shape[0]
@@ -498,7 +498,7 @@ def _pruned_sizes(model: ScaleModel, params: MLParams, batch: int) -> dict[str, 
     n = model.n_sites
     sizes = {"pruned windows": n * -(-nr // 8) * 8 * _F4,
              # window_of, similar, group, log count, source
-             "pruned window tables": n * (params.prune_similar + 4) * _F4,
+             "pruned window tables": n * (params.n_similar + 4) * _F4,
              "pruned flags": batch * _F4}
     if params.prune_projected:
         dims = -(-min(params.prune_projected, nr) // 8) * 8

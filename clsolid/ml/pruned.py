@@ -256,7 +256,7 @@ class Pruning:
 
     def __init__(self, model: ScaleModel, params: MLParams, sources: np.ndarray | None = None) -> None:
         self.model, self.params = model, params
-        self.table = window_table(model, params.prune_similar, sources)
+        self.table = window_table(model, params.n_similar, sources)
         self.voxel_offsets, self.exemplar_offsets = coherence_offsets(model, params.view_names)
         self.projected = (ProjectedWindows.of(model, params.prune_projected, params.prune_projected_probe)
                           if params.prune_projected else None)
