@@ -307,8 +307,8 @@ def synthesize(
         exemplar site; ``"pruned"`` over k-coherence candidates (the sources, nearest
         sites at the last visit, of the voxel and its 8 in-slice neighbours, shifted, and the
         ``prune_similar`` windows most like each (None, the default: 1 with projected
-        candidates, else 8); identical windows count by their number), plus an unbiased estimate of the rest from ``prune_sample`` (64) sites
-        drawn systematically; with ``prune_projected=D`` (0: off) also each voxel's
+        candidates, else 8); identical windows count by their number), plus an unbiased
+        estimate of the rest from ``prune_sample`` (64) sites drawn systematically; with ``prune_projected=D`` (0: off) also each voxel's
         ``prune_projected_k`` (32) sites nearest by the distance projected on the exemplar
         windows' first D principal axes (squared differences only; README, Performance),
         searched in the ``prune_projected_probe`` (8) lists of sites (about sqrt(sites)
