@@ -308,11 +308,12 @@ def synthesize(
         sites at the last visit, of the voxel and its 8 in-slice neighbours, shifted, and the
         ``prune_similar`` windows most like each (None, the default: 1 with projected
         candidates, else 8); identical windows count by their number), plus an unbiased
-        estimate of the rest from ``prune_sample`` (64) sites drawn systematically; with ``prune_projected=D`` (0: off) also each voxel's
-        ``prune_projected_k`` (32) sites nearest by the distance projected on the exemplar
-        windows' first D principal axes (squared differences only; README, Performance),
-        searched in the ``prune_projected_probe`` (8) lists of sites (about sqrt(sites)
-        lists, by k-means) whose centres are nearest (0: every site), in the first
+        estimate of the rest from ``prune_sample`` sites drawn systematically (None, the
+        default: 32 with projected candidates, else 64); with ``prune_projected=D`` (0: off)
+        also each voxel's ``prune_projected_k`` (32) sites nearest by the distance projected
+        on the exemplar windows' first D principal axes (squared differences only; README,
+        Performance), searched in the ``prune_projected_probe`` (8) lists of sites (about
+        sqrt(sites) lists, by k-means) whose centres are nearest (0: every site), in the first
         ``prune_projected_sweeps`` (1) sweeps of each scale (0: every sweep); a neighbourhood whose
         mean (1 - t)^2 is below ``prune_min_weight`` (default 0: none) gets the exact sum
         (``clsolid.ml.pruned``). ``"auto"`` (default) prunes categorical exemplars (binary or

@@ -170,7 +170,8 @@ def _add_synth(sub) -> None:
                    help="pruned: windows taken per source, itself included (default: 1 with projected "
                         "candidates, else 8)")
     p.add_argument("--prune-sample", type=int, default=d.prune_sample,
-                   help="pruned: sites sampled to estimate the rest of the sum (default %(default)s)")
+                   help="pruned: sites sampled to estimate the rest of the sum (default: 32 with projected "
+                        "candidates, else 64)")
     p.add_argument("--prune-projected", type=int, default=d.prune_projected, metavar="AXES",
                    help="pruned, grey exemplars: also take each voxel's nearest sites by the distance projected "
                         "on the exemplar windows' first AXES principal axes (0: off; default: 24 where auto prunes "

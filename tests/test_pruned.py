@@ -290,6 +290,10 @@ def test_auto_projects_grey_exemplars_from_ten_thousand_sites():
     assert MLParams().for_exemplar(3, True, 0.0, (side, side)).prune_similar == 8
     assert MLParams(prune_similar=5).for_exemplar(32, False, 0.0, (side, side)).prune_similar == 5
     assert (MLParams().n_similar, MLParams(prune_projected=4).n_similar) == (8, 1)
+    assert MLParams().for_exemplar(32, False, 0.0, (side, side)).prune_sample == 32
+    assert MLParams().for_exemplar(3, True, 0.0, (side, side)).prune_sample == 64
+    assert MLParams(prune_sample=0).for_exemplar(32, False, 0.0, (side, side)).prune_sample == 0
+    assert (MLParams().n_sample, MLParams(prune_projected=4).n_sample) == (64, 32)
     assert MLParams(likelihood="pruned").for_exemplar(32, False, 0.0, (64, 64)).prune_projected == 0
 
 
@@ -374,7 +378,7 @@ def test_projected_candidates_only_in_the_first_sweeps(device, small_labels, eve
     from clsolid.core.philox import relax_tag
 
     params, model = _model(small_labels, neighborhood=5, likelihood="pruned", prune_projected=8,
-                           prune_projected_k=20, prune_projected_sweeps=every, prune_similar=4)
+                           prune_projected_k=20, prune_projected_sweeps=every, prune_similar=4, prune_sample=16)
     plain = MLParams(**{**params.to_dict(), "prune_projected": 0})
     vol, temp, sources = _state(model, seed=4)
     voxels = np.flatnonzero(model.colour.ravel() == 2)

@@ -150,7 +150,7 @@ class _Clock:
         """Terms per voxel visit: every site's window, or, pruned, at most the candidates and the sample."""
         sites = model.n_sites
         if self.params.likelihood == "pruned":
-            sites = min(sites, 9 * self.params.n_similar + self.params.prune_sample)
+            sites = min(sites, 9 * self.params.n_similar + self.params.n_sample)
         return sites * model.patches.shape[0]
 
     def plan(self, first: int, visits: list[int]) -> None:

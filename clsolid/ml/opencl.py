@@ -354,7 +354,7 @@ class CLBackend:
                 self.vol_buf, self.temp_buf, *self._shape_args(), *self.placement, self.vox_buf,
                 np.int32(n_exact * views), np.int32(n_items), np.int32(views), self.offsets, *self.coherence,
                 self.src, np.int32(self.n_block), *self.windows, self.projected_out, np.int32(self.n_projected),
-                np.int32(min(self.params.prune_sample, m.n_sites)), *self.sample_key,
+                np.int32(min(self.params.n_sample, m.n_sites)), *self.sample_key,
                 np.int32(self.n_groups), self.kfactor, self.sums)
         return n_items
 
@@ -369,7 +369,7 @@ class CLBackend:
                               *self._shape_args(), self.vox_buf, np.int32(voxels.size),
                               np.int32(m.offsets.shape[0]), self.offsets, self.src,
                               np.int32(self.n_block), np.float32(self.params.prune_min_weight),
-                              np.int32(self.params.prune_sample == 0), self.flags_buf)
+                              np.int32(self.params.n_sample == 0), self.flags_buf)
         cl.enqueue_copy(q, flags, self.flags_buf)
         exact = flags.astype(bool)
         voxels[:] = np.concatenate([voxels[exact], voxels[~exact]])

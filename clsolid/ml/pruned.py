@@ -244,7 +244,7 @@ def projects(params: MLParams, tag: int) -> bool:
 def may_need_exact(params: MLParams) -> bool:
     """Whether any voxel can need the exact sum under *params* (:func:`needs_exact`): not with a
     sample and no weight threshold, the defaults, so a run need not look."""
-    return params.prune_min_weight > 0 or params.prune_sample == 0
+    return params.prune_min_weight > 0 or params.n_sample == 0
 
 
 class Pruning:
@@ -268,7 +268,7 @@ class Pruning:
         if not may_need_exact(p):
             return np.zeros(np.size(voxels), bool)
         weights = np.stack([mean_square_weight(temp, wrapped_coords(voxels, m.shape, off)) for off in m.offsets])
-        return needs_exact(src[:, voxels], weights, p.prune_min_weight, p.prune_sample)
+        return needs_exact(src[:, voxels], weights, p.prune_min_weight, p.n_sample)
 
     def weights(self, src: np.ndarray, seed: int, tag: int, voxels: np.ndarray, view: int,
                 vol: np.ndarray | None = None) -> np.ndarray:
@@ -279,7 +279,7 @@ class Pruning:
         relaxation *tag*)."""
         m = self.model
         nb = wrapped_coords(voxels, m.shape, self.voxel_offsets[view])
-        sampled = sample_sites(seed, tag, voxels, m.shape, view, m.n_sites, self.params.prune_sample)
+        sampled = sample_sites(seed, tag, voxels, m.shape, view, m.n_sites, self.params.n_sample)
         extra = self.projected_windows(vol, voxels, view) if projects(self.params, tag) else None
         return term_weights(self.table, src[view][nb], self.exemplar_offsets[view], sampled, extra)
 
