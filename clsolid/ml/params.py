@@ -261,9 +261,10 @@ class MLParams:
                      shape: tuple[int, int] | None = None) -> "MLParams":
         """These parameters with ``likelihood="auto"``, ``distance="auto"``,
         ``insert_spacing=None``, ``falloff=None``, ``seam_gap=None``, ``prune_projected=None``,
-        ``prune_similar=None`` and ``prune_sample=None`` resolved for an exemplar of *n_levels* levels, *categorical* if they are its own values
-        (not a quantisation of grey ones), whose :func:`~clsolid.core.slices.seam_ratio` is
-        *seam_ratio*, of *shape* (rows, columns; None: small)."""
+        ``prune_similar=None`` and ``prune_sample=None`` resolved for an exemplar of *n_levels*
+        levels, *categorical* if they are its own values (not a quantisation of grey ones),
+        whose :func:`~clsolid.core.slices.seam_ratio` is *seam_ratio*, of *shape* (rows,
+        columns; None: small)."""
         phases = categorical and n_levels <= AUTO_PRUNED_LEVELS
         k = self.neighborhood
         large = shape is not None and (shape[0] - k + 1) * (shape[1] - k + 1) >= AUTO_PROJECTED_SITES
