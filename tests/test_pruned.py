@@ -253,6 +253,8 @@ def test_auto_prunes_categorical_and_large_grey_exemplars(device, name, size, le
                              full_output=True)
     assert res.params["likelihood"] == want
     assert res.params["prune_projected"] == (24 if name == "gravel" else 0)  # grey and large: projected
+    if want == "pruned":  # and there, the sources' own windows and half the sample
+        assert (res.params["prune_similar"], res.params["prune_sample"]) == ((1, 32) if name == "gravel" else (8, 64))
     forced = clsolid.synthesize(image, (8, 8, 8), levels=levels, scales=1, neighborhood=3, rng=1, device=device,
                                 likelihood="exact" if want == "pruned" else "pruned", full_output=True)
     assert forced.params["likelihood"] != want
