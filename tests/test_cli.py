@@ -94,6 +94,10 @@ def test_same_seed_same_file(tmp_path, device):
     (["--likelihood", "pruned", "--prune-similar", "4", "--prune-sample", "32", "--prune-min-weight", "0.1"],
      "likelihood", "pruned"),
     ([], "distance", "squared"),  # brick is grey: auto squares the differences
+    ([], "prune_similar", 8),  # resolved and recorded: 8 without projected candidates
+    (["--likelihood", "pruned", "--prune-projected", "4"], "prune_similar", 1),  # 1 with them
+    (["--likelihood", "pruned", "--prune-projected", "4", "--prune-projected-sweeps", "2"],
+     "prune_projected_sweeps", 2),
     (["--distance", "mismatch"], "distance", "mismatch"),
     ([], "insert_piece", 0),  # each +in slice one exemplar window
     (["--insert-piece", "4"], "insert_piece", 4),
