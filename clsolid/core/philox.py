@@ -37,7 +37,7 @@ def relax_tag(level: int, sweep: int) -> int:
 
 def tag_sweep(tag: int) -> int:
     """The sweep (from 1 within its scale) of relaxation tag *tag* (:func:`relax_tag`)."""
-    return tag & 0xFFFFF
+    return tag & ((1 << 20) - 1)
 
 
 def sample_tag(tag: int) -> int:

@@ -493,7 +493,7 @@ class CLBackend:
 
 def _pruned_sizes(model: ScaleModel, params: MLParams, batch: int) -> dict[str, int]:
     """Bytes of the pruned sum's buffers (:meth:`CLBackend._start_pruned`), at most: every
-    site's window taken as distinct, the site lists as many as :func:`~clsolid.ml.pruned.site_lists` makes."""
+    site's window taken as distinct, as many site lists as :func:`~clsolid.ml.pruned.n_site_lists` asks for."""
     views, nr = model.offsets.shape[:2]
     n = model.n_sites
     sizes = {"pruned windows": n * -(-nr // 8) * 8 * _F4,
@@ -502,7 +502,7 @@ def _pruned_sizes(model: ScaleModel, params: MLParams, batch: int) -> dict[str, 
              "pruned flags": batch * _F4}
     if params.prune_projected:
         dims = -(-min(params.prune_projected, nr) // 8) * 8
-        lists = max(1, round(float(np.sqrt(n)))) if params.prune_projected_probe else 1
+        lists = pruned.n_site_lists(n) if params.prune_projected_probe else 1
         sizes["projected sites"] = (n * (dims + 1) + lists * (dims + 1) + 1 + nr * (dims + 2)) * _F4
     k = params.prune_projected_k if params.prune_projected else 0
     sizes["projected candidates"] = max(1, batch * views * k) * _F4

@@ -100,6 +100,9 @@ PROJECTED_SIMILAR = 1
 # candidates, which scored alike on the 128^2 grey gallery (seeds 1-4) in 82 % of the time.
 DEFAULT_SAMPLE = 64
 PROJECTED_SAMPLE = 32
+# What a record with projected candidates ran with where it predates an option: every site
+# searched (before the site lists), in every sweep (before prune_projected_sweeps).
+_PROJECTED_AS_IT_RAN = {"prune_projected_probe": 0, "prune_projected_sweeps": 0}
 
 #: How two neighbourhoods (and a label and a centre value) differ. "squared" sums squared
 #: grey-level differences (the thesis); "mismatch" counts the neighbours whose labels differ,
@@ -323,10 +326,8 @@ class MLParams:
         """The parameters recorded by :meth:`to_dict` (e.g. ``SynthesisResult.params``, a checkpoint's);
         other keys are ignored. Keys a record predates take the value it ran with, not today's default."""
         kept = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
-        if kept.get("prune_projected") and "prune_projected_probe" not in kept:
-            kept["prune_projected_probe"] = 0  # written before the site lists: every site was searched
-        if kept.get("prune_projected") and "prune_projected_sweeps" not in kept:
-            kept["prune_projected_sweeps"] = 0  # written before it: every sweep searched
+        if kept.get("prune_projected"):
+            kept = {**_PROJECTED_AS_IT_RAN, **kept}
         return cls(**kept)
 
     @property

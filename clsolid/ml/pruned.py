@@ -327,7 +327,7 @@ class ProjectedWindows:
         axes = np.linalg.svd(windows - mean, full_matrices=False)[2][:dims].T
         sites = (windows - mean) @ axes
         if probe:
-            centres, list_of = site_lists(sites, max(1, round(math.sqrt(sites.shape[0]))))
+            centres, list_of = site_lists(sites, n_site_lists(sites.shape[0]))
         else:
             centres, list_of = sites.mean(axis=0, keepdims=True), np.zeros(sites.shape[0], np.int64)
         return cls(scale, mean, axes, sites, centres, list_of, min(max(probe, 1), centres.shape[0]))
@@ -359,6 +359,11 @@ class ProjectedWindows:
 def _squared_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``(m, n)``: squared distances between the rows of *a* and *b*."""
     return (a**2).sum(axis=1)[:, None] - 2.0 * a @ b.T + (b**2).sum(axis=1)[None, :]
+
+
+def n_site_lists(n_sites: int) -> int:
+    """How many lists :meth:`ProjectedWindows.of` asks :func:`site_lists` for: about sqrt(n)."""
+    return max(1, round(math.sqrt(n_sites)))
 
 
 def site_lists(sites: np.ndarray, count: int, iterations: int = 10) -> tuple[np.ndarray, np.ndarray]:
