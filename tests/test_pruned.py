@@ -49,6 +49,26 @@ def test_similar_windows_are_the_nearest_lowest_index_first(levels, offset):
     np.testing.assert_array_equal(got[:, 1:], want)
 
 
+@pytest.mark.parametrize("n, k", [(2, 1), (5, 4), (70, 3), (1500, 7), (2500, 1)])
+def test_nearest_columns_sort_by_value_then_column(n, k):
+    """The bounded selection against a full sort of every row: few columns (groups of one),
+    every column wanted, more rows than columns, and ties everywhere (values 0..3)."""
+    d = np.random.default_rng(n).integers(0, 4, (40, n)).astype(float)
+    d[np.arange(40) % n, np.arange(40) % n] = np.inf
+    want = np.lexsort((np.broadcast_to(np.arange(n), d.shape), d), axis=1)[:, :k]
+    np.testing.assert_array_equal(pruned.nearest_columns(d, k), want)
+
+
+def test_similar_windows_across_blocks():
+    """More windows than one block of the search (pruned._BLOCK), with ties across the cut."""
+    rows = np.random.default_rng(2).integers(0, 2, (pruned._BLOCK + 300, 6))
+    got = pruned.similar_windows(rows, 4)
+    d = ((rows[:, None, :] - rows[None, :, :]) ** 2).sum(-1).astype(float)
+    np.fill_diagonal(d, np.inf)
+    want = np.lexsort((np.broadcast_to(np.arange(rows.shape[0]), d.shape), d), axis=1)[:, :3]
+    np.testing.assert_array_equal(got[:, 1:], want)
+
+
 def test_window_table_groups_identical_windows(small_labels):
     binary = (small_labels > 7).astype(int)
     _, model = _model(binary, neighborhood=5)
