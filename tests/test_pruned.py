@@ -69,6 +69,24 @@ def test_similar_windows_across_blocks():
     np.testing.assert_array_equal(got[:, 1:], want)
 
 
+def test_listed_similar_windows_reading_every_list_are_the_exact_ones(monkeypatch):
+    """Above EXACT_SIMILAR_WINDOWS the search reads a few lists; reading them all it is the
+    brute force, and reading a few it finds nearly the same windows."""
+    rows = np.random.default_rng(3).integers(0, 3, (900, 10))
+    exact = pruned.similar_windows(rows, 5)
+    monkeypatch.setattr(pruned, "EXACT_SIMILAR_WINDOWS", 100)
+    monkeypatch.setattr(pruned, "SIMILAR_PROBE", 10**6)
+    np.testing.assert_array_equal(pruned.similar_windows(rows, 5), exact)
+    monkeypatch.setattr(pruned, "SIMILAR_PROBE", 4)
+    listed = pruned.similar_windows(rows, 5)
+    assert listed.shape == exact.shape and np.array_equal(listed[:, 0], np.arange(900))
+    assert all(np.unique(r).size == 5 for r in listed)
+    d = lambda m: ((rows[:, None, :] - rows[m[:, 1:]]) ** 2).sum(-1)  # noqa: E731
+    got, best = d(listed), d(exact)
+    assert np.all(np.diff(got, axis=1) >= 0) and np.all(got >= best)  # nearest first; never nearer than exact
+    assert np.mean(got[:, 0] == best[:, 0]) > 0.8
+
+
 def test_window_table_groups_identical_windows(small_labels):
     binary = (small_labels > 7).astype(int)
     _, model = _model(binary, neighborhood=5)

@@ -38,6 +38,11 @@ from .params import VIEW_AXES, MLParams
 
 _BLOCK = 1024  # windows per block of the similarity search, at most
 _BLOCK_ENTRIES = 1 << 26  # distances per block (256 MB of float32): bounds its memory for any exemplar
+#: Above this many distinct windows (more than a 256^2 exemplar can hold at 11 x 11) the similar
+#: windows are searched in lists (:func:`_listed_similar`), not by brute force.
+EXACT_SIMILAR_WINDOWS = 1 << 16
+SIMILAR_PROBE = 8  # lists read per list
+SIMILAR_AXES = 24  # principal axes the lists are made on
 #: How far from a voxel the pruned sum reads sources: its 3 x 3 in-slice window in each view.
 COHERENCE_REACH = 1
 
@@ -72,6 +77,10 @@ def similar_windows(neighbours: np.ndarray, count: int) -> np.ndarray:
     of *neighbours* ``(U, R)`` by squared distance (rounded to a whole number), lower index
     first on a tie.
 
+    Up to :data:`EXACT_SIMILAR_WINDOWS` rows (every exemplar up to 256^2) the nearest among all
+    rows, by brute force; above it, an O(U^2) search would take from minutes to hours, and the
+    nearest are looked for among the rows of a few lists only (:func:`_listed_similar`).
+
     Grey levels and one-hot codes are whole numbers: while every distance is below 2^22 they
     are exact in float32 in any order of summation, which halves the work; else float64.
     """
@@ -85,16 +94,52 @@ def similar_windows(neighbours: np.ndarray, count: int) -> np.ndarray:
     sq = np.sum(x * x, axis=1)
     if np.array_equal(x, np.rint(x)) and 4.0 * sq.max() < 2.0**24:
         x, sq = x.astype(np.float32), sq.astype(np.float32)
+    if u > EXACT_SIMILAR_WINDOWS:
+        out[:, 1:] = _listed_similar(x, sq, count - 1)
+        return out
     block = max(1, min(_BLOCK, _BLOCK_ENTRIES // u))
     for lo in range(0, u, block):
         hi = min(u, lo + block)
-        d = x[lo:hi] @ x.T
-        d *= -2.0
-        d += sq[None, :]
-        d += sq[lo:hi, None]
-        np.rint(d, out=d)
-        d[np.arange(hi - lo), np.arange(lo, hi)] = np.inf  # itself is first already
-        out[lo:hi, 1:] = nearest_columns(d, count - 1)
+        out[lo:hi, 1:] = _nearest_of(x, sq, np.arange(lo, hi), np.arange(u), count - 1)
+    return out
+
+
+def _nearest_of(x: np.ndarray, sq: np.ndarray, rows: np.ndarray, among: np.ndarray, k: int) -> np.ndarray:
+    """``(rows.size, k)``: the *k* nearest of *among* (ascending) to each of *rows* of *x*, by
+    rounded squared distance, lower index first on a tie, each row itself left out."""
+    d = x[rows] @ x[among].T
+    d *= -2.0
+    d += sq[among][None, :]
+    d += sq[rows][:, None]
+    np.rint(d, out=d)
+    at = np.minimum(np.searchsorted(among, rows), among.size - 1)
+    r = np.flatnonzero(among[at] == rows)
+    d[r, at[r]] = np.inf  # itself is first already
+    return among[nearest_columns(d, k)]
+
+
+def _listed_similar(x: np.ndarray, sq: np.ndarray, k: int) -> np.ndarray:
+    """``(U, k)``: each row's *k* nearest among the rows of the *probe* lists whose centres are
+    nearest its own list's (its own first; :data:`SIMILAR_PROBE`), the rows split into about sqrt(U) lists by k-means
+    on their first :data:`SIMILAR_AXES` principal axes (:func:`site_lists`); an inverted
+    file, as the projected search uses. Approximate: a near row in a list not read is missed.
+    The cost falls from U^2 distances to about SIMILAR_PROBE * U^1.5."""
+    mean = x.mean(axis=0, dtype=np.float64)
+    sample = x[:: max(1, x.shape[0] // 20000)] - mean  # the axes from about 20,000 rows
+    axes = np.linalg.svd(sample, full_matrices=False)[2][:SIMILAR_AXES].T
+    centres, list_of = site_lists(x @ axes - mean @ axes, n_site_lists(x.shape[0]))
+    near = np.argsort(_squared_distances(centres, centres), axis=1, kind="stable")
+    members = np.split(np.argsort(list_of, kind="stable"), np.cumsum(np.bincount(list_of))[:-1])
+    out = np.empty((x.shape[0], k), np.int32)
+    for lst, rows in enumerate(members):
+        read, n = 0, 0
+        while n <= k or read < SIMILAR_PROBE:  # enough rows to choose from, and the probe's lists read
+            n += members[near[lst, read]].size
+            read += 1
+            if read == near.shape[1]:
+                break
+        among = np.sort(np.concatenate([members[j] for j in near[lst, :read]]))
+        out[rows] = _nearest_of(x, sq, rows, among, k)
     return out
 
 
