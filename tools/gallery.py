@@ -32,7 +32,7 @@ from PIL import Image
 import clsolid
 from clsolid import metrics
 from clsolid.exemplar import nearest_level_index
-from clsolid.gallery import SIZES, gallery_exemplar, gallery_info, gallery_names
+from clsolid.gallery import MAX_SIZE, SIZES, gallery_exemplar, gallery_info, gallery_names
 from clsolid.metrics._common import jsonable
 from clsolid.metrics.symmetry import AXIS_PAIRS
 from clsolid.core.views import VIEW_SETS
@@ -293,7 +293,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--names", nargs="+", choices=gallery_names(), default=list(gallery_names()),
                     metavar="NAME", help=f"exemplars (default: all of {', '.join(gallery_names())})")
-    ap.add_argument("--size", type=int, choices=SIZES, default=64, help="exemplar side (default 64)")
+    ap.add_argument("--size", type=int, choices=(*SIZES, MAX_SIZE), default=64,
+                    help=f"exemplar side (default 64; the gallery is meant at {SIZES})")
     ap.add_argument("--shape", type=int, default=48, metavar="N", help="cube side of the volumes (default 48)")
     ap.add_argument("--seeds", nargs="+", type=int, default=[1], help="seeds (default 1)")
     ap.add_argument("--method", default="ml", help="synthesis method (default ml)")
