@@ -10,7 +10,7 @@ import numpy as np
 
 from .errors import InputError
 from .ml.params import MLParams
-from .core.hostmemory import check_host_memory
+from .core.hostmemory import check_host_memory, exemplar_terms
 from .core.slices import seam_ratio
 from .ml.driver import SweepInfo, SynthesisResult, check_shape, resolve_seed, run_ml
 
@@ -383,7 +383,7 @@ def synthesize(
 
 def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_output, hook, state):
     """Run (or, from *state*, go on with) a likelihood synthesis and shape its result."""
-    check_host_memory(shape, "ml")
+    check_host_memory(shape, "ml", exemplar_terms(levels_of.labels.shape, params.neighborhood))
     vol, timings, bandwidths = run_ml(levels_of.labels, shape, params, seed, backend, progress,
                                       checkpoint=hook, resume=state)
     labels = np.rint(vol).astype(np.uint8 if levels_of.values.size <= 256 else np.uint16)

@@ -8,7 +8,8 @@ import pytest
 
 import clsolid
 from clsolid.cli import EXIT_MEMORY, main
-from clsolid.core.hostmemory import BYTES_PER_VOXEL, ENV, available_bytes, check_host_memory, parse_bytes
+from clsolid.core.hostmemory import (BYTES_PER_EXEMPLAR_TERM, BYTES_PER_VOXEL, ENV, available_bytes, check_host_memory,
+                                     exemplar_terms, parse_bytes)
 from clsolid.errors import HostMemoryError, InputError
 from clsolid.gallery import gallery_exemplar
 
@@ -45,6 +46,28 @@ def test_a_block_over_the_available_memory_is_refused_with_what_to_do(monkeypatc
     with pytest.raises(HostMemoryError):  # the search methods keep more a voxel
         check_host_memory((side, side, side), "search")
     assert BYTES_PER_VOXEL["search"] > BYTES_PER_VOXEL["ml"]
+
+
+def test_the_exemplar_windows_are_counted():
+    assert exemplar_terms((64, 80), 11) == 54 * 70 * 120
+    assert exemplar_terms((9, 9), 11) == 0
+    blocks = 16**3 * BYTES_PER_VOXEL["ml"]
+    exemplar = exemplar_terms((1024, 1024), 11) * BYTES_PER_EXEMPLAR_TERM
+    assert 6.2e9 < exemplar < 8e9  # a 1024^2 exemplar peaked at 6.19 GB, whatever the block
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv(ENV, str(blocks + exemplar))
+        check_host_memory((16, 16, 16), "ml", exemplar_terms((1024, 1024), 11))  # fits exactly
+        with pytest.raises(HostMemoryError, match="exemplar's windows") as info:
+            check_host_memory((16, 16, 17), "ml", exemplar_terms((1024, 1024), 11))
+    assert info.value.exemplar == exemplar
+    assert str(pickle.loads(pickle.dumps(info.value))) == str(info.value)
+
+
+def test_synthesize_refuses_a_large_exemplar_for_a_small_block(monkeypatch):
+    """24^3 alone fits, with a 128^2 exemplar's windows it does not: refused before anything is built."""
+    monkeypatch.setenv(ENV, str(24**3 * BYTES_PER_VOXEL["ml"] + 2**20))
+    with pytest.raises(HostMemoryError, match="exemplar's windows"):
+        clsolid.synthesize(gallery_exemplar("porous50", 128), (24, 24, 24), device="reference", rng=1)
 
 
 @pytest.mark.parametrize("method", ["ml", "kopf"])

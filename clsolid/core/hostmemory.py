@@ -24,6 +24,14 @@ from ..errors import HostMemoryError, InputError
 #: :func:`clsolid.core.schedule.colour_set`).
 BYTES_PER_VOXEL = {"ml": 48, "search": 120}
 
+#: Host bytes each term of the exemplar's windows costs the likelihood method (its sites at
+#: the finest scale times the window's terms, k^2 - 1): the windows of every scale in float64,
+#: their device copies, the distinct windows and their similar-window tables. Measured as
+#: the growth of peak RSS from a 256^2 to a 512^2 and a 1024^2 binary exemplar into 24^3 to
+#: 32^3 (11 x 11: 0.68, 1.73 and 6.19 GB; 46 and 48 bytes a term), with some room. A 1024^2
+#: exemplar takes about 7 GB whatever the block; the search methods' is not measured.
+BYTES_PER_EXEMPLAR_TERM = 56
+
 #: Environment variable that overrides the memory thought available (bytes, or with a
 #: K, M, G or T suffix): where the system's figure is wrong for a run (swap, a cgroup).
 ENV = "CLSOLID_HOST_MEMORY"
@@ -61,10 +69,19 @@ def available_bytes() -> int | None:
         return None
 
 
-def check_host_memory(shape: tuple[int, int, int], kind: str) -> None:
+def check_host_memory(shape: tuple[int, int, int], kind: str, exemplar_terms: int = 0) -> None:
     """Refuse (:class:`~clsolid.errors.HostMemoryError`) a *shape* block whose run would take
-    more host memory than is available (*kind*: ``"ml"`` or ``"search"``)."""
-    need = int(np.prod(shape, dtype=np.int64)) * BYTES_PER_VOXEL[kind]
+    more host memory than is available (*kind*: ``"ml"`` or ``"search"``), counting
+    *exemplar_terms* (:func:`exemplar_terms`) at :data:`BYTES_PER_EXEMPLAR_TERM` each."""
+    exemplar = int(exemplar_terms) * BYTES_PER_EXEMPLAR_TERM
+    need = int(np.prod(shape, dtype=np.int64)) * BYTES_PER_VOXEL[kind] + exemplar
     have = available_bytes()
     if have is not None and need > have:
-        raise HostMemoryError(shape, need, have, BYTES_PER_VOXEL[kind])
+        raise HostMemoryError(shape, need, have, BYTES_PER_VOXEL[kind], exemplar)
+
+
+def exemplar_terms(exemplar_shape: tuple[int, int], neighborhood: int) -> int:
+    """The terms of an exemplar's windows at its finest scale: its sites (every window inside
+    it) times the window's neighbours (``neighborhood^2 - 1``)."""
+    sites = max(0, exemplar_shape[0] - neighborhood + 1) * max(0, exemplar_shape[1] - neighborhood + 1)
+    return sites * (neighborhood * neighborhood - 1)
