@@ -79,6 +79,8 @@ def test_listed_similar_windows_reading_every_list_are_the_exact_ones(monkeypatc
     np.testing.assert_array_equal(pruned.similar_windows(rows, 5), exact)
     monkeypatch.setattr(pruned, "SIMILAR_PROBE", 4)
     listed = pruned.similar_windows(rows, 5)
+    monkeypatch.setattr(pruned, "_BLOCK_ENTRIES", 3000)  # a list's rows a few at a time: the same
+    np.testing.assert_array_equal(pruned.similar_windows(rows, 5), listed)
     assert listed.shape == exact.shape and np.array_equal(listed[:, 0], np.arange(900))
     assert all(np.unique(r).size == 5 for r in listed)
     d = lambda m: ((rows[:, None, :] - rows[m[:, 1:]]) ** 2).sum(-1)  # noqa: E731

@@ -119,11 +119,12 @@ def _nearest_of(x: np.ndarray, sq: np.ndarray, rows: np.ndarray, among: np.ndarr
 
 
 def _listed_similar(x: np.ndarray, sq: np.ndarray, k: int) -> np.ndarray:
-    """``(U, k)``: each row's *k* nearest among the rows of the *probe* lists whose centres are
-    nearest its own list's (its own first; :data:`SIMILAR_PROBE`), the rows split into about sqrt(U) lists by k-means
-    on their first :data:`SIMILAR_AXES` principal axes (:func:`site_lists`); an inverted
-    file, as the projected search uses. Approximate: a near row in a list not read is missed.
-    The cost falls from U^2 distances to about SIMILAR_PROBE * U^1.5."""
+    """``(U, k)``: each row's *k* nearest among the rows of the :data:`SIMILAR_PROBE` lists
+    whose centres are nearest its own list's (its own first), the rows split into about
+    sqrt(U) lists by k-means on their first :data:`SIMILAR_AXES` principal axes
+    (:func:`site_lists`); an inverted file, as the projected search uses. Approximate: a near
+    row in a list not read is missed. The cost falls from U^2 distances to about
+    SIMILAR_PROBE * U^1.5."""
     mean = x.mean(axis=0, dtype=np.float64)
     sample = x[:: max(1, x.shape[0] // 20000)] - mean  # the axes from about 20,000 rows
     axes = np.linalg.svd(sample, full_matrices=False)[2][:SIMILAR_AXES].T
@@ -139,7 +140,9 @@ def _listed_similar(x: np.ndarray, sq: np.ndarray, k: int) -> np.ndarray:
             if read == near.shape[1]:
                 break
         among = np.sort(np.concatenate([members[j] for j in near[lst, :read]]))
-        out[rows] = _nearest_of(x, sq, rows, among, k)
+        block = max(1, _BLOCK_ENTRIES // among.size)  # a crowded list's distances, a block at a time
+        for lo in range(0, rows.size, block):
+            out[rows[lo: lo + block]] = _nearest_of(x, sq, rows[lo: lo + block], among, k)
     return out
 
 
