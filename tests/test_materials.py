@@ -164,13 +164,16 @@ KOPF_TARGETS = {  # (exemplar, target, search): None if met, else why not
     ("gravel", "autocorrelation", "exact"): None, ("gravel", "autocorrelation", "coherence"): "0.36",
     ("gravel", "mirror", "exact"): None, ("gravel", "mirror", "coherence"): None,
     ("grass", "autocorrelation", "exact"): None,  # 0.14; 1.17 with the parent square weighed 1
-    ("grass", "autocorrelation", "coherence"): "0.34",
+    ("grass", "autocorrelation", "coherence"): "0.34 on a Xeon; 0.23/0.13 on a Zen 4 with PoCL",
 }
+# Misses that another machine meets: the coherence search's sums run in an order the device
+# decides, and these values sit near their limit (an expected failure, not a strict one).
+KOPF_EITHER_SIDE = {("grass", "autocorrelation", "coherence")}
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name, target, search", [
-    pytest.param(*key, marks=[] if why is None else pytest.mark.xfail(strict=True, reason=why))
+    pytest.param(*key, marks=[] if why is None else pytest.mark.xfail(strict=key not in KOPF_EITHER_SIDE, reason=why))
     for key, why in KOPF_TARGETS.items()])
 def test_issue_11_kopf_targets_at_48(gallery_runs, name, target, search):
     key, limit = KOPF_LIMITS[target]
