@@ -48,17 +48,16 @@ def test_a_block_over_the_available_memory_is_refused_with_what_to_do(monkeypatc
     assert BYTES_PER_VOXEL["search"] > BYTES_PER_VOXEL["ml"]
 
 
-def test_the_exemplar_windows_are_counted():
+def test_the_exemplar_windows_are_counted(monkeypatch):
     assert exemplar_terms((64, 80), 11) == 54 * 70 * 120
     assert exemplar_terms((9, 9), 11) == 0
-    blocks = 16**3 * BYTES_PER_VOXEL["ml"]
-    exemplar = exemplar_terms((1024, 1024), 11) * BYTES_PER_EXEMPLAR_TERM
+    terms = exemplar_terms((1024, 1024), 11)
+    exemplar = terms * BYTES_PER_EXEMPLAR_TERM
     assert 6.2e9 < exemplar < 8e9  # a 1024^2 exemplar peaked at 6.19 GB, whatever the block
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv(ENV, str(blocks + exemplar))
-        check_host_memory((16, 16, 16), "ml", exemplar_terms((1024, 1024), 11))  # fits exactly
-        with pytest.raises(HostMemoryError, match="exemplar's windows") as info:
-            check_host_memory((16, 16, 17), "ml", exemplar_terms((1024, 1024), 11))
+    monkeypatch.setenv(ENV, str(16**3 * BYTES_PER_VOXEL["ml"] + exemplar))
+    check_host_memory((16, 16, 16), "ml", terms)  # fits exactly
+    with pytest.raises(HostMemoryError, match="exemplar's windows") as info:
+        check_host_memory((16, 16, 17), "ml", terms)
     assert info.value.exemplar == exemplar
     assert str(pickle.loads(pickle.dumps(info.value))) == str(info.value)
 
