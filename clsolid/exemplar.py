@@ -308,6 +308,12 @@ class LevelMap:
         return self.values[labels]
 
 
+def window_grid(shape: tuple[int, ...], neighborhood: int) -> tuple[int, int]:
+    """``(rows, columns)`` of the sites of an exemplar of *shape* whose ``neighborhood``-square
+    window lies wholly inside it (none wraps round); their count is the product."""
+    return max(0, shape[0] - neighborhood + 1), max(0, shape[1] - neighborhood + 1)
+
+
 def nearest_level_index(values: Any, levels: np.ndarray) -> np.ndarray:
     """Index in the sorted *levels* of the level nearest to each of *values* (flattened; the
     lower level on a tie). Values between levels, as averaging methods and ``h1-mean`` write,

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from PIL import Image
 
 from clsolid.errors import InputError
-from clsolid.exemplar import BUILTINS, builtin_exemplar, load_exemplar, quantise
+from clsolid.exemplar import BUILTINS, builtin_exemplar, load_exemplar, quantise, window_grid
 
 
 def _block_mean(name: str, region: int, size: int) -> np.ndarray:
@@ -361,3 +361,9 @@ def test_quantise_integer_matches_exact_rule(values, levels):
     else:
         expected = [min((v - lo) * levels // (hi - lo), levels - 1) for v in values]
     np.testing.assert_array_equal(q, expected)
+
+
+def test_window_grid_counts_the_sites_whose_window_fits():
+    assert window_grid((64, 40), 11) == (54, 30)  # centres 5..58 and 5..34
+    assert window_grid((11, 11), 11) == (1, 1)
+    assert window_grid((9, 64), 11) == (0, 54)  # no window fits a side shorter than the window

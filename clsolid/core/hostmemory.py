@@ -13,6 +13,7 @@ import os
 import numpy as np
 
 from ..errors import HostMemoryError, InputError
+from ..exemplar import window_grid
 
 #: Host bytes a voxel of the full-resolution block costs at a run's peak, with some room
 #: over what was measured (porous50, Intel's CPU runtime, whose device buffers are host
@@ -83,5 +84,5 @@ def check_host_memory(shape: tuple[int, int, int], kind: str, exemplar_terms: in
 def exemplar_terms(exemplar_shape: tuple[int, int], neighborhood: int) -> int:
     """The terms of an exemplar's windows at its finest scale: its sites (every window inside
     it) times the window's neighbours (``neighborhood^2 - 1``)."""
-    sites = max(0, exemplar_shape[0] - neighborhood + 1) * max(0, exemplar_shape[1] - neighborhood + 1)
-    return sites * (neighborhood * neighborhood - 1)
+    rows, cols = window_grid(exemplar_shape, neighborhood)
+    return rows * cols * (neighborhood * neighborhood - 1)

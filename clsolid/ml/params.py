@@ -10,6 +10,7 @@ from ..core.checks import int_in, one_of
 from ..core.views import DEPTH_AXIS, VIEW_AXES, VIEW_SETS  # noqa: F401 (this method's names too)
 from ..core.slices import FALLBACK_SPACING, SEAM_GAP, SEAM_SHOWS
 from ..errors import InputError
+from ..exemplar import window_grid
 
 #: clsolid name -> (kernel code, thesis tag, paper tag). One table, used by the API, the CLI,
 #: the docs and both back ends. Heuristics that compare LCPDFs across views (all but
@@ -272,7 +273,7 @@ class MLParams:
         columns; None: small)."""
         phases = categorical and n_levels <= AUTO_PRUNED_LEVELS
         k = self.neighborhood
-        large = shape is not None and (shape[0] - k + 1) * (shape[1] - k + 1) >= AUTO_PROJECTED_SITES
+        large = shape is not None and math.prod(window_grid(shape, k)) >= AUTO_PROJECTED_SITES
         likelihood = self.likelihood
         if likelihood == "auto":
             likelihood = "pruned" if phases or large else "exact"

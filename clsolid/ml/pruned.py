@@ -33,6 +33,7 @@ import numpy as np
 
 from ..core.philox import bounded, sample_tag, tag_sweep, voxel_words
 from ..errors import InputError
+from ..exemplar import window_grid
 from .model import ScaleModel, view_offsets, wrapped_coords
 from .params import VIEW_AXES, MLParams
 
@@ -118,6 +119,15 @@ def _nearest_of(x: np.ndarray, sq: np.ndarray, rows: np.ndarray, among: np.ndarr
     return among[nearest_columns(d, k)]
 
 
+def principal_axes(x: np.ndarray, dims: int, rows: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The mean ``(R,)`` of the rows of *x* ``(n, R)`` and their first *dims* principal axes
+    ``(R, dims)`` (all R if fewer), found from every row or, with *rows*, from about that many
+    taken at an even stride (the mean from every row either way)."""
+    mean = x.mean(axis=0, dtype=np.float64)
+    taken = x if rows is None else x[:: max(1, x.shape[0] // rows)]
+    return mean, np.linalg.svd(taken - mean, full_matrices=False)[2][:dims].T
+
+
 def _listed_similar(x: np.ndarray, sq: np.ndarray, k: int) -> np.ndarray:
     """``(U, k)``: each row's *k* nearest among the rows of the :data:`SIMILAR_PROBE` lists
     whose centres are nearest its own list's (its own first), the rows split into about
@@ -125,9 +135,7 @@ def _listed_similar(x: np.ndarray, sq: np.ndarray, k: int) -> np.ndarray:
     (:func:`site_lists`); an inverted file, as the projected search uses. Approximate: a near
     row in a list not read is missed. The cost falls from U^2 distances to about
     SIMILAR_PROBE * U^1.5."""
-    mean = x.mean(axis=0, dtype=np.float64)
-    sample = x[:: max(1, x.shape[0] // 20000)] - mean  # the axes from about 20,000 rows
-    axes = np.linalg.svd(sample, full_matrices=False)[2][:SIMILAR_AXES].T
+    mean, axes = principal_axes(x, SIMILAR_AXES, rows=20000)
     centres, list_of = site_lists(x @ axes - mean @ axes, n_site_lists(x.shape[0]))
     near = np.argsort(_squared_distances(centres, centres), axis=1, kind="stable")
     members = np.split(np.argsort(list_of, kind="stable"), np.cumsum(np.bincount(list_of))[:-1])
@@ -202,8 +210,7 @@ def window_table(model: ScaleModel, similar: int, sources: np.ndarray | None = N
     *sources*: :func:`source_of_site` of *model*, if the caller has it already."""
     rows = np.column_stack([model.centres, model.patches.T])
     first, window_of, count = unique_rows(rows)
-    k = 2 * model.half + 1
-    grid = (model.exemplar.shape[0] - k + 1, model.exemplar.shape[1] - k + 1)
+    grid = window_grid(model.exemplar.shape, 2 * model.half + 1)
     first = first.astype(np.int32)
     return WindowTable(window_of=window_of.astype(np.int32), first_site=first, count=count.astype(np.int32),
                        source=(source_of_site(model) if sources is None else sources)[first],
@@ -400,8 +407,7 @@ class ProjectedWindows:
                              "exemplar's default); phases compared as names have no projection")
         scale = np.ones(model.patches.shape[0]) if model.term_weight is None else np.sqrt(model.term_weight)
         windows = model.patches.T * scale
-        mean = windows.mean(axis=0)
-        axes = np.linalg.svd(windows - mean, full_matrices=False)[2][:dims].T
+        mean, axes = principal_axes(windows, dims)
         sites = (windows - mean) @ axes
         if probe:
             centres, list_of = site_lists(sites, n_site_lists(sites.shape[0]))
