@@ -437,3 +437,39 @@ def gallery_exemplar(name: str, size: int = 64) -> np.ndarray:
     size = _check_int(size, "size", MIN_SIZE, MAX_SIZE, f"the gallery is meant at sizes {SIZES}")
     rng = None if entry.seed is None else np.random.default_rng(entry.seed)
     return entry._make(size, rng)
+
+
+def gallery_draw(name: str, size: int = 64, draw: int = 1) -> np.ndarray:
+    """Another sample of a generated exemplar's material: the same generator, drawn anew.
+
+    A volume's slices should look like new pieces of the material, not like the exemplar
+    itself; where the generator is known, new draws show what such pieces score
+    (``tools/photo_windows.py``), the level a synthesis cannot be asked to beat.
+
+    Parameters
+    ----------
+    name : str
+        A generated exemplar (``gallery_info(name).seed`` is not None); the photographs
+        (brick, grass, gravel, tissue) have no generator.
+    size : int, default 64
+        As for :func:`gallery_exemplar` (the same field of view, the same feature sizes).
+    draw : int, default 1
+        Which draw, 1 or more: the generator seeded with ``(seed, draw)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(size, size)`` uint8, as :func:`gallery_exemplar` gives, of another draw.
+
+    Raises
+    ------
+    InputError
+        Unknown or photographed ``name``, ``size`` out of range or ``draw`` below 1.
+    """
+    entry = gallery_info(name)
+    if entry.seed is None:
+        raise InputError(f"{name!r} is a photograph ({entry.source}): it has no generator to draw again; "
+                         "tools/photo_windows.py takes windows of the whole photograph instead")
+    size = _check_int(size, "size", MIN_SIZE, MAX_SIZE, f"the gallery is meant at sizes {SIZES}")
+    draw = _check_int(draw, "draw", 1, 2**31 - 1, "draw 1 or more (the exemplar itself is gallery_exemplar)")
+    return entry._make(size, np.random.default_rng([entry.seed, draw]))

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from clsolid.errors import InputError
-from clsolid.gallery import SIZES, gallery_exemplar, gallery_info, gallery_names
+from clsolid.gallery import SIZES, gallery_draw, gallery_exemplar, gallery_info, gallery_names
 from clsolid.metrics import (match_counts, max_copy_fraction, mirror_chance, mirror_correlation,
                              mirror_correlations)
 
@@ -223,3 +223,17 @@ def test_random_volume_copies_little():
     rng = np.random.default_rng(4)
     m = max_copy_fraction(rng.integers(0, 16, (16, 16, 16)), rng.integers(0, 16, (16, 16)))
     assert m.fraction < 0.25
+
+
+def test_a_draw_is_another_sample_of_the_same_material():
+    ex = gallery_exemplar("composite3", 64)
+    one, two = gallery_draw("composite3"), gallery_draw("composite3", 64, 2)
+    np.testing.assert_array_equal(one, gallery_draw("composite3", 64, 1))  # reproducible; draw 1 by default
+    assert two.shape == ex.shape and set(np.unique(two)) == set(np.unique(ex))  # the same phases
+    assert np.mean(one != ex) > 0.2 and np.mean(one != two) > 0.2  # new pieces
+    fractions = [np.mean(img == 128) for img in (ex, one)]
+    assert abs(fractions[0] - fractions[1]) < 0.1  # of the same law
+    with pytest.raises(InputError, match="photograph"):
+        gallery_draw("brick")
+    with pytest.raises(InputError, match="draw"):
+        gallery_draw("porous50", 64, 0)

@@ -257,3 +257,22 @@ def test_photo_windows_stay_inside_the_photograph_and_are_scored(capsys, tool):
     photo_windows.main(["--names", "gravel", "--sides", "24", "--seeds", "1"])
     row = capsys.readouterr().out.splitlines()[-1].split("|")
     assert row[1].strip() == "gravel" and row[2].strip() == "24²" and abs(float(row[5])) < 1.0
+
+
+def test_material_windows_of_a_generated_exemplar_come_from_new_draws(capsys, tool):
+    from clsolid.gallery import gallery_draw, gallery_exemplar
+
+    photo_windows = tool("photo_windows")
+    stack = photo_windows.drawn_windows("porous50", 64, 24, draws=3, seed=2)
+    assert stack.shape == (photo_windows.COUNT, 24, 24)
+    draws = [gallery_draw("porous50", 64, 2 * 3 + 1 + j) for j in range(3)]
+    ex = gallery_exemplar("porous50", 64)
+
+    def found_in(w, img):
+        return any((img[i: i + 24, j: j + 24] == w).all() for i in range(41) for j in range(41))
+    owner = [next(j for j, d in enumerate(draws) if found_in(w, d)) for w in stack]
+    assert owner == [0] * 6 + [1] * 5 + [2] * 5  # 16 windows, spread over the three draws
+    assert not any(found_in(w, ex) for w in stack[:3])  # not pieces of the exemplar
+    photo_windows.main(["--names", "porous50", "--size", "64", "--sides", "24", "--seeds", "1"])
+    row = capsys.readouterr().out.splitlines()[-1].split("|")
+    assert row[1].strip() == "porous50" and abs(float(row[5])) < 0.5 and abs(float(row[8])) < 0.5  # patch, C2 near 0
