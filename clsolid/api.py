@@ -10,7 +10,7 @@ import numpy as np
 
 from .errors import InputError
 from .ml.params import MLParams
-from .core.hostmemory import check_host_memory, exemplar_terms
+from .core.hostmemory import check_host_memory, check_scratch_space, exemplar_terms
 from .core.slices import seam_ratio
 from .ml.driver import SweepInfo, SynthesisResult, check_shape, resolve_seed, run_ml
 
@@ -36,9 +36,10 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
                "prune_similar", "prune_sample", "prune_min_weight", "prune_projected",
                "prune_projected_k", "prune_projected_probe", "prune_projected_sweeps", "falloff")
-_BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client")
+_BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client", "scratch")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
 _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
+_LABEL_PLANES = 8  # planes of the result made into labels at once
 
 
 def is_reference(device) -> bool:
@@ -86,15 +87,19 @@ def make_backend(device, backend_options: dict):
     *backend_options* give a ``tile`` (see :mod:`clsolid.ml.tiled`), its tiles run on the
     workers of a Dask ``client`` if they give one (see :mod:`clsolid.ml.distributed`)."""
     options = dict(backend_options)
-    tile, client = options.pop("tile", None), options.pop("client", None)
+    tile, client, scratch = options.pop("tile", None), options.pop("client", None), options.pop("scratch", None)
+    if scratch is not None and tile is None:
+        raise InputError(f"scratch={scratch!r} keeps a tiled run's state on disk: give tile=N too (--tile N); "
+                         "a block in one piece lives on the device")
     if is_reference(device):
-        for name, value in (("tile", tile), ("client", client)):
+        for name, value in (("tile", tile), ("client", client), ("scratch", scratch)):
             if value is not None:
                 raise InputError(f"{name}={value!r} is for OpenCL devices: the reference back end holds the whole "
                                  f"volume on the host; drop {name}")
         from .ml.reference import ReferenceBackend
 
         return ReferenceBackend()
+    from .core.scratch import Scratch
     from .ml.tiled import TiledBackend, check_edge
 
     if client is not None:
@@ -104,12 +109,12 @@ def make_backend(device, backend_options: dict):
         from .ml.distributed import DaskTiles
 
         check_edge(tile)  # before asking the workers anything
-        return TiledBackend(DaskTiles(client, device, **options), tile)
+        return TiledBackend(DaskTiles(client, device, **options), tile, Scratch(scratch) if scratch else None)
     from .ml.opencl import CLBackend
     from .core.device import select_device
 
     engine = CLBackend(select_device(device), **options)
-    return engine if tile is None else TiledBackend(engine, tile)
+    return engine if tile is None else TiledBackend(engine, tile, Scratch(scratch) if scratch else None)
 
 
 def synthesize(
@@ -280,7 +285,11 @@ def synthesize(
         once as tasks on its workers, each opening ``device`` (a spec string; None: each
         worker's best) for itself (``clsolid.ml.distributed``; ``pip install "clsolid[dask]"``).
         The volume is again the one-piece run's; every set ships each tile's state to a worker
-        and back, so it pays for tiles large enough that compute dominates.
+        and back, so it pays for tiles large enough that compute dominates. ``scratch`` (a
+        folder; needs ``tile``) keeps the whole block's state in memory-mapped files in a
+        folder made there and removed at the end (``clsolid.core.scratch``), for blocks larger
+        than the host's memory: the same volume, a few bytes a voxel in memory (the result's
+        among them) and about 40 on that disk, which is checked for room first.
 
         Relaxation (thesis_spec §2.3): ``relaxation`` is ``"gibbs"`` (default: each visited
         voxel draws its label from the combined, normalised LCPDF; per-voxel temperatures,
@@ -383,10 +392,21 @@ def synthesize(
 
 def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_output, hook, state):
     """Run (or, from *state*, go on with) a likelihood synthesis and shape its result."""
-    check_host_memory(shape, "ml", exemplar_terms(levels_of.labels.shape, params.neighborhood))
-    vol, timings, bandwidths = run_ml(levels_of.labels, shape, params, seed, backend, progress,
-                                      checkpoint=hook, resume=state)
-    labels = np.rint(vol).astype(np.uint8 if levels_of.values.size <= 256 else np.uint16)
+    scratch = getattr(backend, "scratch", None)
+    on_disk = scratch is not None and scratch.on_disk
+    check_host_memory(shape, "ml-scratch" if on_disk else "ml", exemplar_terms(levels_of.labels.shape,
+                                                                                 params.neighborhood))
+    if on_disk:
+        check_scratch_space(shape, scratch.root)
+    try:
+        vol, timings, bandwidths = run_ml(levels_of.labels, shape, params, seed, backend, progress,
+                                          checkpoint=hook, resume=state)
+        labels = np.empty(vol.shape, np.uint8 if levels_of.values.size <= 256 else np.uint16)
+        for lo in range(0, vol.shape[0], _LABEL_PLANES):  # no whole float temporary (host memory)
+            labels[lo: lo + _LABEL_PLANES] = np.rint(vol[lo: lo + _LABEL_PLANES])
+    finally:
+        if scratch is not None:
+            scratch.close()
     if not full_output:
         return labels if output == "labels" else levels_of.to_values(labels)
     effective = {"method": "ml", **params.to_dict(), "bandwidth_effective": bandwidths, "shape": list(shape)}
@@ -398,7 +418,7 @@ def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_outp
 
 def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | None = None,
            output: str = "values", full_output: bool = False, checkpoint_every: float = 0.0,
-           tile: int | None = None, client=None):
+           tile: int | None = None, client=None, scratch=None):
     """Go on with a likelihood synthesis from its checkpoint folder, and keep checkpointing there.
 
     Parameters
@@ -415,6 +435,8 @@ def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | N
         ``tile``), whether or not the run began in tiles: the volume is the same.
     client : distributed.Client, optional
         Run those tiles on its Dask workers (as :func:`synthesize`'s ``client``).
+    scratch : str or path, optional
+        Keep those tiles' state in files in this folder (as :func:`synthesize`'s ``scratch``).
 
     Returns
     -------
@@ -442,7 +464,8 @@ def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | N
     if expected is None or state.volume.size != int(np.prod(expected)):
         raise CheckpointError(f"{checkpoint}: the saved volume ({state.volume.size} voxels) does not fit scale "
                               f"{state.scale + 1} of a {shape} run: the checkpoint is corrupt")
-    backend = make_backend(device, {k: v for k, v in (("tile", tile), ("client", client)) if v is not None})
+    backend = make_backend(device, {k: v for k, v in (("tile", tile), ("client", client), ("scratch", scratch))
+                                    if v is not None})
     if backend.name != meta.get("device"):
         log.warning("resuming on %s a run begun on %s: the volume will differ from the uninterrupted one",
                     backend.name, meta.get("device"))

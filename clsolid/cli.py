@@ -200,6 +200,10 @@ def _add_synth(sub) -> None:
                    help="ml: synthesize the block in tiles of at most N voxels on a side, each with a halo, for "
                         "blocks larger than the device holds; the same volume as in one piece, more slowly "
                         "(default: one piece)")
+    p.add_argument("--scratch", type=Path, default=None, metavar="DIR",
+                   help="ml, with --tile: keep the block's state in memory-mapped files in a folder made in DIR "
+                        "(removed at the end), for blocks larger than the host's memory: a few bytes a voxel stay "
+                        "in memory and about 40 go to the disk; the same volume")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="ml, with --tile: run the tiles of every set on the workers of the Dask scheduler at ADDRESS "
                         "(each worker uses its own OpenCL device, --device naming it); needs clsolid[dask]")
@@ -326,8 +330,8 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
             "prune_similar", "prune_sample", "prune_min_weight", "prune_projected", "prune_projected_k",
-            "prune_projected_probe", "prune_projected_sweeps", "falloff", "tile", "scheduler", "workers", "indices",
-            "track")
+            "prune_projected_probe", "prune_projected_sweeps", "falloff", "tile", "scratch", "scheduler", "workers",
+            "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "parent_weight", "init", "rule", "order", "causal", "histogram",
             "candidates", "specify", "search", "exact_passes", "site_map", "source_map")
 
@@ -335,7 +339,7 @@ _WL_ONLY = ("iterations", "inner", "no_parent", "parent_weight", "init", "rule",
 #: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
 _RESUME_FIXED = ("exemplar", "shape", "method", "preset", "heuristic", "neighborhood", "scales", "views", "levels",
                  "seed", "builtin_size", "checkpoint", "track") + _WL_ONLY + tuple(
-                     n for n in _ML_ONLY if n not in ("indices", "track", "tile", "scheduler", "workers"))
+                     n for n in _ML_ONLY if n not in ("indices", "track", "tile", "scratch", "scheduler", "workers"))
 
 
 def _given(args, names) -> str:
@@ -401,6 +405,8 @@ def _ml_options(args) -> dict:
                    falloff=args.falloff)
     if args.tile is not None:
         options["tile"] = args.tile
+    if args.scratch is not None:
+        options["scratch"] = args.scratch
     for name in ("bandwidth", "bandwidth_factor"):  # one value applies to every scale
         values = getattr(args, name)
         if values is not None:
@@ -510,7 +516,8 @@ def cmd_synth(args) -> int:
     with _dask_client(args) as client:
         if args.resume is not None:
             result = resume(args.resume, device=args.device, progress=report, full_output=True,
-                            checkpoint_every=args.checkpoint_every, tile=args.tile, client=client)
+                            checkpoint_every=args.checkpoint_every, tile=args.tile, client=client,
+                            scratch=args.scratch)
         else:
             if args.checkpoint is not None:
                 options.update(checkpoint=args.checkpoint, checkpoint_every=args.checkpoint_every)

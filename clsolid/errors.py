@@ -45,20 +45,21 @@ class HostMemoryError(ClsolidError, MemoryError):
     """A block would take more host memory than is available (checked before allocating;
     :mod:`clsolid.core.hostmemory`)."""
 
-    def __init__(self, shape: tuple[int, int, int], need: int, have: int, per_voxel: int, exemplar: int = 0):
+    def __init__(self, shape: tuple[int, int, int], need: int, have: int, per_voxel: int, exemplar: int = 0,
+                 hint: str = ""):
         self.shape, self.need, self.have, self.per_voxel = tuple(shape), int(need), int(have), int(per_voxel)
-        self.exemplar = int(exemplar)
+        self.exemplar, self.hint = int(exemplar), hint
         tables = (f", and {self.exemplar / 2**30:.1f} GiB of it the exemplar's windows at every scale "
                   "(a smaller exemplar needs less)") if self.exemplar else ""
         super().__init__(
             f"a {'x'.join(map(str, self.shape))} block needs about {need / 2**30:.1f} GiB of host memory "
             f"(about {per_voxel} bytes a voxel: the host keeps the whole block and its state, tiled or "
-            f"not{tables}), but {have / 2**30:.1f} GiB is available; grow a smaller block, free memory or use "
+            f"not{tables}), but {have / 2**30:.1f} GiB is available; grow a smaller block, free memory{hint} or use "
             "a machine with more (CLSOLID_HOST_MEMORY=64G overrides the figure available, as with swap)"
         )
 
     def __reduce__(self):
-        return type(self), (self.shape, self.need, self.have, self.per_voxel, self.exemplar)
+        return type(self), (self.shape, self.need, self.have, self.per_voxel, self.exemplar, self.hint)
 
 
 class KernelBuildError(ClsolidError, RuntimeError):

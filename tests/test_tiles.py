@@ -1,13 +1,18 @@
 """Tiles (issue 12, point 2): the tile geometry, and a tiled run that gives the one-piece run's
 volume voxel for voxel, with its memory checked per tile."""
 
+import os
+
 import numpy as np
 import pytest
 
 import clsolid
 from clsolid.cli import EXIT_USAGE, main
+from clsolid.core.hostmemory import (BYTES_PER_EXEMPLAR_TERM, ENV, SCRATCH_BYTES_PER_VOXEL, check_scratch_space,
+                                     exemplar_terms)
+from clsolid.core.scratch import Scratch
 from clsolid.core.tiles import Tiling, gather, split_axis
-from clsolid.errors import DeviceMemoryError, InputError
+from clsolid.errors import DeviceMemoryError, HostMemoryError, InputError
 from clsolid.exemplar import quantise
 from clsolid.ml import tiled
 from clsolid.ml.driver import run_ml
@@ -184,5 +189,85 @@ def test_tiled_checkpoint_resumes_identically(tmp_path, device):
             raise Stop
 
     with pytest.raises(Stop):
-        clsolid.synthesize("gravel", (12, 10, 14), tile=5, checkpoint=tmp_path, progress=stop, **kw)
-    np.testing.assert_array_equal(clsolid.resume(tmp_path, device=device, tile=6), whole)
+        clsolid.synthesize("gravel", (12, 10, 14), tile=5, checkpoint=tmp_path / "run", progress=stop, **kw)
+    (tmp_path / "scratch").mkdir()  # and the state on disk from there on
+    np.testing.assert_array_equal(clsolid.resume(tmp_path / "run", device=device, tile=6, scratch=tmp_path / "scratch"),
+                                  whole)
+
+
+# -- the state on disk (scratch) -----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("case", [CASES[1], CASES[4]], ids=["icm-pruned-3views", "annealing-exact"])
+def test_state_on_disk_gives_the_same_volume(device, labels, case, tmp_path):
+    """The whole-block arrays as memory-mapped files: the one-piece run's volume, and the
+    files are removed when the run ends."""
+    params = _params(case)
+    a = run_ml(labels, SHAPE, params, 7, CLBackend(device))[0]
+    with Scratch(tmp_path) as scratch:
+        tiles = TiledBackend(CLBackend(device), case["tile"], scratch)
+        b = run_ml(labels, SHAPE, params, 7, tiles)[0]
+        assert isinstance(tiles.volume(), np.memmap) and isinstance(tiles.temperature(), np.memmap)
+        assert isinstance(tiles._src, np.memmap) and os.path.dirname(tiles.volume().filename) == scratch.folder
+        np.testing.assert_array_equal(a, b)
+        # freed as they went: the finest scale's state, and its random start gone
+        assert sorted(os.listdir(scratch.folder)) == sorted(os.path.basename(x.filename)
+                                                             for x in (tiles._vol, tiles._temp, tiles._src))
+    assert os.listdir(tmp_path) == []
+
+
+def test_scratch_through_the_api_and_the_cli(device, tmp_path):
+    kw = dict(neighborhood=5, scales=2, rng=4, builtin_size=16, sweeps=2, device=device)
+    whole = clsolid.synthesize("gravel", (12, 10, 14), **kw)
+    np.testing.assert_array_equal(clsolid.synthesize("gravel", (12, 10, 14), tile=5, scratch=tmp_path, **kw), whole)
+    assert os.listdir(tmp_path) == []  # its folder removed
+    with pytest.raises(InputError, match="give tile=N too"):
+        clsolid.synthesize("gravel", (12, 10, 14), scratch=tmp_path, **kw)
+    with pytest.raises(InputError, match="does not exist"):
+        clsolid.synthesize("gravel", (12, 10, 14), tile=5, scratch=tmp_path / "nowhere", **kw)
+    with pytest.raises(InputError, match="is for OpenCL devices"):
+        clsolid.synthesize("gravel", (12, 10, 14), tile=5, scratch=tmp_path, **{**kw, "device": "reference"})
+    args = ["--shape", "12", "10", "14", "--neighborhood", "5", "--scales", "2", "--seed", "4", "--builtin-size",
+            "16", "--sweeps", "2", "-q"]
+    out = tmp_path / "out"
+    out.mkdir()
+    assert main(["synth", "gravel", "-o", str(out / "a.npy"), *args]) == 0
+    assert main(["synth", "gravel", "-o", str(out / "b.npy"), *args, "--tile", "5", "--scratch", str(tmp_path)]) == 0
+    np.testing.assert_array_equal(np.load(out / "a.npy"), np.load(out / "b.npy"))
+    assert main(["synth", "gravel", "-o", str(out / "c.npy"), *args, "--scratch", str(tmp_path)]) == EXIT_USAGE
+    assert sorted(os.listdir(tmp_path)) == ["out"]
+
+
+def test_scratch_space_is_checked_first(device, tmp_path, monkeypatch):
+    import shutil
+
+    usage = shutil.disk_usage(tmp_path)
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: usage._replace(free=64**3 * SCRATCH_BYTES_PER_VOXEL - 1))
+    with pytest.raises(InputError, match=r"64x64x64 block keeps about .* GiB free; free space there"):
+        clsolid.synthesize("gravel", (64, 64, 64), tile=16, scratch=tmp_path, device=device)
+    check_scratch_space((63, 64, 64), str(tmp_path))  # fits
+
+
+def test_scratch_arrays(tmp_path):
+    with Scratch() as ram:
+        assert not ram.on_disk and type(ram.empty((2, 3), np.int32)) is np.ndarray
+    source = np.arange(24, dtype=np.float64).reshape(2, 3, 4) + 0.25
+    with Scratch(tmp_path) as disk:
+        copied = disk.copy(source, np.float32)
+        np.testing.assert_array_equal(copied, source.astype(np.float32))
+        filled = disk.full((5,), -1, np.int32)
+        assert isinstance(filled, np.memmap) and (filled == -1).all() and len(os.listdir(disk.folder)) == 2
+        disk.free(copied)
+        disk.free(source)  # not its own: nothing happens
+        assert os.listdir(disk.folder) == [os.path.basename(filled.filename)]
+    assert os.listdir(tmp_path) == []
+
+
+def test_the_host_check_counts_what_stays_in_memory(device, tmp_path, monkeypatch):
+    kw = dict(neighborhood=5, scales=2, rng=4, builtin_size=16, sweeps=1, device=device, tile=5)
+    shape = (12, 10, 14)
+    exemplar = exemplar_terms((16, 16), 5) * BYTES_PER_EXEMPLAR_TERM
+    monkeypatch.setenv(ENV, str(exemplar + int(np.prod(shape)) * 20))  # 20 bytes a voxel
+    with pytest.raises(HostMemoryError, match="--scratch DIR"):
+        clsolid.synthesize("gravel", shape, **kw)
+    assert clsolid.synthesize("gravel", shape, scratch=tmp_path, **kw).shape == shape  # 8 in memory

@@ -22,8 +22,15 @@ from ..exemplar import window_grid
 #: told; the search methods, from 96^3 to 128^3 with the coherence search, ``kopf`` 50 and
 #: ``chen-wang`` 81 (their estimate keeps 50 %). The drivers hold no whole-block index
 #: arrays (each conflict-free set is generated when it is relaxed,
-#: :func:`clsolid.core.schedule.colour_set`).
-BYTES_PER_VOXEL = {"ml": 48, "search": 120}
+#: :func:`clsolid.core.schedule.colour_set`). With the state in a scratch folder
+#: (:mod:`clsolid.core.scratch`) what stays in memory grew by 5.1 bytes a voxel (traced, from
+#: 40^3 to 64^3: the trusted and visited masks, the balance's labels, the result); the files'
+#: pages count in the resident size too, but the system pages them out as it needs.
+BYTES_PER_VOXEL = {"ml": 48, "ml-scratch": 8, "search": 120}
+#: Disk bytes a voxel of a tiled likelihood run with a scratch folder takes there at its
+#: peak (:mod:`clsolid.core.scratch`): the random start (4) and the finest scale's start state
+#: (4 + 8) beside the back end's state (4 + 4 + 4 a view), and the coarser scales' 1/7 more.
+SCRATCH_BYTES_PER_VOXEL = 40
 
 #: Host bytes each term of the exemplar's windows costs the likelihood method (its sites at
 #: the finest scale times the window's terms, k^2 - 1): the windows of every scale in float64,
@@ -72,13 +79,29 @@ def available_bytes() -> int | None:
 
 def check_host_memory(shape: tuple[int, int, int], kind: str, exemplar_terms: int = 0) -> None:
     """Refuse (:class:`~clsolid.errors.HostMemoryError`) a *shape* block whose run would take
-    more host memory than is available (*kind*: ``"ml"`` or ``"search"``), counting
+    more host memory than is available (*kind*: ``"ml"``, ``"ml-scratch"``, a tiled run with its
+    state on disk, or ``"search"``), counting
     *exemplar_terms* (:func:`exemplar_terms`) at :data:`BYTES_PER_EXEMPLAR_TERM` each."""
     exemplar = int(exemplar_terms) * BYTES_PER_EXEMPLAR_TERM
     need = int(np.prod(shape, dtype=np.int64)) * BYTES_PER_VOXEL[kind] + exemplar
     have = available_bytes()
     if have is not None and need > have:
-        raise HostMemoryError(shape, need, have, BYTES_PER_VOXEL[kind], exemplar)
+        hint = (", keep a tiled run's state on disk (tile= and scratch=, --tile N --scratch DIR: about "
+                f"{BYTES_PER_VOXEL['ml-scratch']} bytes a voxel stay in memory)") if kind == "ml" else ""
+        raise HostMemoryError(shape, need, have, BYTES_PER_VOXEL[kind], exemplar, hint)
+
+
+def check_scratch_space(shape: tuple[int, int, int], folder: str) -> None:
+    """Refuse (:class:`~clsolid.errors.InputError`) a scratch *folder* whose disk has less room
+    than a *shape* block's state takes there (:data:`SCRATCH_BYTES_PER_VOXEL`)."""
+    import shutil
+
+    need = int(np.prod(shape, dtype=np.int64)) * SCRATCH_BYTES_PER_VOXEL
+    free = shutil.disk_usage(folder).free
+    if need > free:
+        raise InputError(f"a {'x'.join(map(str, shape))} block keeps about {need / 2**30:.1f} GiB of state in the "
+                         f"scratch folder {folder!r} (about {SCRATCH_BYTES_PER_VOXEL} bytes a voxel), but its disk "
+                         f"has {free / 2**30:.1f} GiB free; free space there or choose a folder on a larger disk")
 
 
 def exemplar_terms(exemplar_shape: tuple[int, int], neighborhood: int) -> int:

@@ -169,9 +169,13 @@ class DaskTiles:
         """Refuse tiles whose buffers (for a run of *params*) exceed some worker's device (checked there)."""
         self._on_each(check_task, self.spec, self.options, models, edge, params)
 
-    def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
-        return self.client.submit(init_task, self.spec, self.options, tuple(shape), seed, pixels,
-                                  pure=False).result()
+    def init_volume(self, shape, seed: int, pixels: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """The random start, drawn by a worker (copied into *out* if given)."""
+        vol = self.client.submit(init_task, self.spec, self.options, tuple(shape), seed, pixels, pure=False).result()
+        if out is None:
+            return vol
+        out[...] = vol
+        return out
 
     def load_scale(self, model: ScaleModel, params: MLParams, block) -> None:
         """Send the scale's tables to every worker (each builds its engine on its first tile)."""

@@ -17,6 +17,7 @@ from .model import ScaleModel, build_scale, check_exemplar_fits
 from .params import MLParams
 from ..core.philox import relax_tag
 from ..core.schedule import set_order
+from ..core.scratch import Scratch
 from ..core.slices import insert_slices
 from ..core.threads import serial_blas
 from ..core.synthesis import SweepInfo, SynthesisResult, check_shape, resolve_seed  # noqa: F401 (re-exported)
@@ -24,15 +25,18 @@ from ..core.synthesis import SweepInfo, SynthesisResult, check_shape, resolve_se
 log = logging.getLogger(__name__)
 
 
-def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, params: MLParams, seed: int = 0):
+def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, params: MLParams, seed: int = 0,
+                scratch: Scratch | None = None):
     """Volume and temperatures at the start of a scale (§2.7); t = 0 marks trusted voxels.
 
     The random start *base* (full resolution) is decimated; the coarser scale's result is
-    copied in (1/8 or 8/8), then the ``+in`` slices get this scale's exemplar.
+    copied in (1/8 or 8/8), then the ``+in`` slices get this scale's exemplar. Both arrays are
+    made on *scratch* (default: in memory).
     """
+    scratch = Scratch() if scratch is None else scratch
     step = 2**model.level
-    vol = base[::step, ::step, ::step].astype(np.float32)  # label indices: exact in float32
-    temp = np.full(model.shape, params.initial_temperature)
+    vol = scratch.copy(base[::step, ::step, ::step], np.float32)  # label indices: exact in float32
+    temp = scratch.full(model.shape, params.initial_temperature, np.float64)
     if coarse is not None:
         if params.upsampling == "8/8":
             up = coarse.repeat(2, 0).repeat(2, 1).repeat(2, 2)
@@ -254,6 +258,7 @@ def run_ml(
     Returns the full-resolution volume, the timings and the per-scale bandwidths.
     """
     check_exemplar_fits(labels_img.shape, params)
+    scratch = getattr(backend, "scratch", None) or Scratch()  # a tiled back end's, where it keeps the state
     levels = list(range(params.scales - 1, -1, -1))
     models = [build_scale(labels_img, shape, params, lv) for lv in levels]
     backend.prepare(models, params)  # refuses, before allocating, what the device cannot hold
@@ -282,8 +287,9 @@ def run_ml(
             sources = r.sources
             record = timings["scales"].pop()
         else:
-            vol, temp = start_state(model, base, coarse, params, seed)
+            vol, temp = start_state(model, base, coarse, params, seed, scratch)
             if model.level == 0:
+                scratch.free(base)
                 base = None  # the finest scale has taken all it needs from the random start
             inherited = temp == 0
             if annealing:
@@ -304,7 +310,8 @@ def run_ml(
             else:  # a smaller block in its place; none for a scale resumed midway
                 visits = proxy_visits(model, params, seed, n_sweeps) if first == 1 else []
             clock.plan(first, visits)
-        vol = temp = None  # the back end holds the state now: free the host's copies
+        scratch.free(temp)  # the back end holds the state now (its own temperatures): free the host's copies
+        vol = temp = None
         for sweep in range(first, n_sweeps + 1):
             t_sweep = time.perf_counter()
             if annealing:

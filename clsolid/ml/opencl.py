@@ -166,26 +166,28 @@ class CLBackend:
         return cl.Buffer(self.device.context, flags, hostbuf=np.ascontiguousarray(array))
 
     # -- the back-end interface ----------------------------------------------------------
-    def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
+    def init_volume(self, shape, seed: int, pixels: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Random exemplar pixels, drawn by Philox on (seed, x, y, z) in a kernel, in runs of
-        voxels that fit one buffer (the volume may be larger than the device holds)."""
+        voxels that fit one buffer (the volume may be larger than the device holds); into
+        *out* (float32 of *shape*, such as a scratch file's) if given."""
         import pyopencl as cl
 
         n = int(np.prod(shape))
         k = programs.build(self.device, "core/init.cl")
-        out = np.empty(n, np.float32)
+        out = np.empty(shape, np.float32) if out is None else out
+        flat = out.reshape(n)  # a view: written through, memory-mapped or not
         run = max(1, min(n, self.device.max_alloc // _F4, _INIT_RUN))
         buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, run * _F4)
         key = seed_key(seed)
         px = self._buf(pixels.astype(np.float32).ravel())
         for first in range(0, n, run):
-            part = out[first: first + run]
+            part = flat[first: first + run]
             k["init_random"](self.device.queue, (self._global(part.size),), (self.local,), buf,
                              np.int32(shape[0]), np.int32(shape[1]), np.int32(shape[2]), np.int64(first),
                              np.int32(part.size), np.uint32(key[0]), np.uint32(key[1]), np.uint32(TAG_INIT), px,
                              np.uint32(pixels.size))
             cl.enqueue_copy(self.device.queue, part, buf)
-        return out.reshape(shape)  # float32, as on the device: start_state widens one scale at a time
+        return out  # float32, as on the device: start_state widens one scale at a time
 
     def start_scale(self, model: ScaleModel, vol: np.ndarray, temp: np.ndarray, params: MLParams,
                     sources: np.ndarray | None = None) -> None:

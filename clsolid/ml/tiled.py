@@ -32,6 +32,7 @@ from typing import Any, Iterable, Iterator
 
 import numpy as np
 
+from ..core.scratch import Scratch
 from ..core.tiles import Tiling, gather
 from ..errors import DeviceMemoryError, InputError
 from .balance import n_score_slots, score_rows, score_stride
@@ -143,8 +144,8 @@ class LocalTiles:
     def prepare(self, models: list[ScaleModel], edge: int, params: MLParams | None = None) -> None:
         check_tile(self.engine, models, edge, params)
 
-    def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
-        return self.engine.init_volume(shape, seed, pixels)
+    def init_volume(self, shape, seed: int, pixels: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        return self.engine.init_volume(shape, seed, pixels, out)
 
     def load_scale(self, model: ScaleModel, params: MLParams, block) -> None:
         self.engine.load_scale(model, params, block)
@@ -169,10 +170,14 @@ class TiledBackend:
     tile : int
         Most voxels on a side of a tile's core; each tile takes a halo of the
         neighbourhood's half-width on top (:func:`halo_width`).
+    scratch : Scratch, optional
+        Where the whole block's state is kept (:class:`clsolid.core.scratch.Scratch`; default:
+        in memory). The driver allocates its own whole-block arrays there too.
     """
 
-    def __init__(self, runner: Any, tile: int) -> None:
+    def __init__(self, runner: Any, tile: int, scratch: Scratch | None = None) -> None:
         self.tile = check_edge(tile)
+        self.scratch = Scratch() if scratch is None else scratch
         self.runner = runner if hasattr(runner, "map") else LocalTiles(runner)
         self.name = self.runner.name
         self.exact_visits = self.pruned_visits = 0  # voxel visits by sum, in the pruned mode
@@ -183,20 +188,23 @@ class TiledBackend:
         self.runner.prepare(models, self.tile, params)
 
     def init_volume(self, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
-        """The random start (see :meth:`clsolid.ml.opencl.CLBackend.init_volume`)."""
-        return self.runner.init_volume(shape, seed, pixels)
+        """The random start (see :meth:`clsolid.ml.opencl.CLBackend.init_volume`), on the scratch."""
+        return self.runner.init_volume(shape, seed, pixels, self.scratch.empty(shape, np.float32))
 
     def start_scale(self, model: ScaleModel, vol: np.ndarray, temp: np.ndarray, params: MLParams,
                     sources: np.ndarray | None = None) -> None:
         """Upload a scale's tables, and keep its state on the host; *sources* as for
         :meth:`clsolid.ml.opencl.CLBackend.start_scale`."""
+        for old in (getattr(self, name, None) for name in ("_vol", "_temp", "_src")):
+            self.scratch.free(old)  # the last scale's state (its volume is the start's, made already)
         self.tiling = scale_tiling(model, self.tile)
         self.runner.load_scale(model, params, self.tiling.largest_block)
         views = model.offsets.shape[0]
-        self._vol = np.asarray(vol, np.float32)  # the driver's own start, not copied (host memory)
-        self._temp = np.array(temp, np.float32)
-        self._src = (np.full((views,) + model.shape, -1, np.int32) if sources is None
-                     else np.array(sources, np.int32).reshape((views,) + model.shape))
+        # the driver's own start, not copied (host memory): float32 on this back end's scratch
+        self._vol = vol if vol.dtype == np.float32 else self.scratch.copy(vol, np.float32)
+        self._temp = self.scratch.copy(temp, np.float32)
+        self._src = (self.scratch.full((views,) + model.shape, -1, np.int32) if sources is None
+                     else self.scratch.copy(np.asarray(sources).reshape((views,) + model.shape), np.int32))
         self.stride = score_stride(model.shape)
         self._scores = np.zeros((n_score_slots(model.shape), model.labels.size), np.float32)
 
