@@ -125,12 +125,18 @@ def test_prune_error_measures_projected_candidates(capsys, device, tool):
     assert "gravel:" in out and "PCA: TV 0.0000 (99 %: 0.000), same mode 100.0%" in out
 
 
-def test_bench_scale_prints_a_row_per_run(capsys, device, tool):
-    tool("bench_scale").main(["--cases", "64:8", "--names", "porous50", "--tile", "5", "--device",
-                              device.device.name.strip()[:8]])
+@pytest.mark.parametrize("scratch", [False, True], ids=["in-memory", "scratch"])
+def test_bench_scale_prints_a_row_per_run(capsys, device, tool, scratch, tmp_path):
+    bench = tool("bench_scale")
+    bench.main(["--cases", "64:8", "--names", "porous50", "--tile", "5", "--device",
+                device.device.name.strip()[:8]] + (["--scratch", str(tmp_path)] if scratch else []))
     out = capsys.readouterr().out
     assert "GFLOP/s" in out and "| porous50 | 64² → 8³ | exact |" in out and "| porous50 | 64² → 8³ | pruned |" in out
     assert "tiles of 5" in out and out.count("| yes |") == 2  # a tiled run is the one-piece run
+    if scratch:
+        assert list(tmp_path.iterdir()) == []  # its files gone
+        with pytest.raises(SystemExit):
+            bench.main(["--scratch", str(tmp_path)])  # needs --tile
 
 
 def test_bench_scale_runs_tiles_alone_and_says_every_sweep(capsys, device, tool):

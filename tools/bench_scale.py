@@ -19,6 +19,7 @@ and the table adds its time and whether its volume is the one-process tiled run'
     python tools/bench_scale.py --cases 50:64 --names porous50 --likelihoods pruned --tile 32 --workers 2
     python tools/bench_scale.py --cases 64:512 --names porous50 --likelihoods pruned --tile 256 --tiled-only
 
+``--scratch DIR`` keeps every tiled run's state in files in DIR (``scratch=``, clsolid.core.scratch).
 ``--tiled-only`` runs each case in tiles alone (for blocks whose one-piece run would take
 as long again, or not fit the device); the table then shows the tiled run's figures.
 """
@@ -42,9 +43,10 @@ class _Stop(Exception):
 
 
 def run(image: np.ndarray, side: int, likelihood: str, budget: float, device, tile: int | None = None,
-        client=None, verbose: bool = False) -> dict:
+        client=None, verbose: bool = False, scratch=None) -> dict:
     """Grow a *side*^3 cube (in tiles of *tile*, if given, on the workers of a Dask *client*, if
-    given); return the volume (None if stopped), the time, sweeps and finest-scale cost per voxel visit."""
+    given, their state in files in the folder *scratch*, if given); return the volume (None if
+    stopped), the time, sweeps and finest-scale cost per voxel visit."""
     sweeps: list = []
     t0 = time.perf_counter()
 
@@ -59,7 +61,8 @@ def run(image: np.ndarray, side: int, likelihood: str, budget: float, device, ti
             raise _Stop
 
     stopped, volume = False, None
-    options = {k: v for k, v in (("tile", tile), ("client", client)) if v is not None}
+    options = {k: v for k, v in (("tile", tile), ("client", client), ("scratch", scratch if tile else None))
+               if v is not None}
     try:
         volume = clsolid.synthesize(image, (side,) * 3, rng=1, device=device, likelihood=likelihood,
                                     progress=progress, **options)
@@ -85,11 +88,13 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--verbose", action="store_true", help="print every sweep (to stderr) as it ends")
     ap.add_argument("--tiled-only", action="store_true",
                     help="with --tile: run each case in tiles only, not also in one piece")
+    ap.add_argument("--scratch", default=None, metavar="DIR",
+                    help="with --tile: every tiled run keeps its state in files in DIR (scratch=)")
     ap.add_argument("--workers", type=int, default=None, metavar="N",
                     help="with --tile: also run every case's tiles on a Dask LocalCluster of N worker processes")
     args = ap.parse_args(argv)
-    if args.workers is not None and args.tile is None:
-        ap.error("--workers needs --tile")
+    if (args.workers is not None or args.scratch is not None) and args.tile is None:
+        ap.error("--workers and --scratch need --tile")
     if args.tiled_only and (args.tile is None or args.workers is not None):
         ap.error("--tiled-only needs --tile, and runs no Dask workers")
     with contextlib.ExitStack() as stack:
@@ -128,14 +133,14 @@ def table(args, client) -> None:
             for likelihood in args.likelihoods:
                 first = args.tile if args.tiled_only else None  # the run the row's first columns describe
                 case_name = f"{ex_side}² → {cube}³" + (f", tiles of {args.tile}" if args.tiled_only else "")
-                r = run(image, cube, likelihood, args.budget, device, first, verbose=args.verbose)
+                r = run(image, cube, likelihood, args.budget, device, first, verbose=args.verbose, scratch=args.scratch)
                 row = (f"| {name} | {case_name} | {likelihood} | {seconds(r)} | "
                        f"{r['sweeps']} ({r['finest_sweeps']}) | {r['per_visit_us']:.1f} |")
                 if args.tile is not None and not args.tiled_only:
-                    t = run(image, cube, likelihood, args.budget, device, args.tile)
+                    t = run(image, cube, likelihood, args.budget, device, args.tile, scratch=args.scratch)
                     row += f" {seconds(t)} | {same(r, t)} |"
                     if client is not None:
-                        w = run(image, cube, likelihood, args.budget, device, args.tile, client)
+                        w = run(image, cube, likelihood, args.budget, device, args.tile, client, scratch=args.scratch)
                         row += f" {seconds(w)} | {same(t, w)} |"
                 print(row, flush=True)
 
