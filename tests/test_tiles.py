@@ -10,6 +10,7 @@ import clsolid
 from clsolid.cli import EXIT_USAGE, main
 from clsolid.core.hostmemory import (BYTES_PER_EXEMPLAR_TERM, ENV, SCRATCH_BYTES_PER_VOXEL, check_scratch_space,
                                      exemplar_terms)
+from clsolid.core import scratch as scratch_module
 from clsolid.core.scratch import Scratch
 from clsolid.core.tiles import Tiling, gather, split_axis
 from clsolid.errors import DeviceMemoryError, HostMemoryError, InputError
@@ -248,7 +249,8 @@ def test_scratch_space_is_checked_first(device, tmp_path, monkeypatch):
     check_scratch_space((63, 64, 64), str(tmp_path))  # fits
 
 
-def test_scratch_arrays(tmp_path):
+def test_scratch_arrays(tmp_path, monkeypatch):
+    monkeypatch.setattr(scratch_module, "_RUN_ELEMENTS", 35)  # apply: a plane of 5 x 7 at a time
     with Scratch() as ram:
         assert not ram.on_disk and type(ram.empty((2, 3), np.int32)) is np.ndarray
     source = np.arange(24, dtype=np.float64).reshape(2, 3, 4) + 0.25
@@ -257,6 +259,10 @@ def test_scratch_arrays(tmp_path):
         np.testing.assert_array_equal(copied, source.astype(np.float32))
         filled = disk.full((5,), -1, np.int32)
         assert isinstance(filled, np.memmap) and (filled == -1).all() and len(os.listdir(disk.folder)) == 2
+        t = np.linspace(-1, 1, 3 * 5 * 7).reshape(3, 5, 7)
+        applied = disk.apply(lambda a, b: (a > 0) | b, bool, t, t < -0.5)
+        np.testing.assert_array_equal(applied, (t > 0) | (t < -0.5))
+        disk.free(applied)
         disk.free(copied)
         disk.free(source)  # not its own: nothing happens
         assert os.listdir(disk.folder) == [os.path.basename(filled.filename)]

@@ -23,9 +23,9 @@ from ..exemplar import window_grid
 #: ``chen-wang`` 81 (their estimate keeps 50 %). The drivers hold no whole-block index
 #: arrays (each conflict-free set is generated when it is relaxed,
 #: :func:`clsolid.core.schedule.colour_set`). With the state in a scratch folder
-#: (:mod:`clsolid.core.scratch`) what stays in memory grew by 5.1 bytes a voxel (traced, from
-#: 40^3 to 64^3: the trusted and visited masks, the balance's labels, the result); the files'
-#: pages count in the resident size too, but the system pages them out as it needs.
+#: (:mod:`clsolid.core.scratch`) what stays in memory grew by 4.1 bytes a voxel (traced, from
+#: 40^3 to 64^3: a scale's ``+in`` mask, a set's indices, the result's labels and values); the
+#: files' pages count in the resident size too, but the system pages them out as it needs.
 BYTES_PER_VOXEL = {"ml": 48, "ml-scratch": 8, "search": 120}
 #: Disk bytes a voxel of a tiled likelihood run with a scratch folder takes there at its
 #: peak (:mod:`clsolid.core.scratch`): the random start (4) and the finest scale's start state

@@ -2,10 +2,11 @@
 
 A tiled run (issue 12) keeps the whole block's state on the host: its values, temperatures
 and sources, 16 bytes a voxel with two views, and at the start of each scale the random start
-and the start state beside them. In memory that bounds the block by the host's memory
+and the start state beside them; the driver's trusted and visited masks and the balance's
+labels, a byte a voxel each. In memory that bounds the block by the host's memory
 (512^3 takes about 6 GB, 1024^3 about 48). With a scratch folder those arrays are
 ``numpy.memmap`` files there instead, which the operating system pages in and out: the block
-is bounded by the disk, and by the memory the arrays that stay in memory take (a byte or two
+is bounded by the disk, and by the memory the arrays that stay in memory take (about 4 bytes
 a voxel; README, Using it). The arrays are the same either way, so the volume is too.
 
 Every conflict-free set spreads over the whole block, so a sweep reads and writes the whole
@@ -19,11 +20,14 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from ..errors import InputError
+
+#: Most elements :meth:`Scratch.apply` computes at once.
+_RUN_ELEMENTS = 1 << 22
 
 class Scratch:
     """Allocates a run's whole-block arrays in memory (*folder* None) or as files in a fresh
@@ -58,6 +62,16 @@ class Scratch:
         no whole temporary)."""
         out = self.empty(source.shape, dtype)
         out[...] = source
+        return out
+
+    def apply(self, fn: Callable[..., np.ndarray], dtype: Any, *arrays: np.ndarray) -> np.ndarray:
+        """``fn(*arrays)`` as a new array of *dtype*, computed a run of planes (first axis) at
+        a time, so that no whole temporary of ``fn``'s is made."""
+        out = self.empty(arrays[0].shape, dtype)
+        plane = max(1, int(np.prod(arrays[0].shape[1:])))
+        run = max(1, _RUN_ELEMENTS // plane)
+        for lo in range(0, arrays[0].shape[0], run):
+            out[lo: lo + run] = fn(*(a[lo: lo + run] for a in arrays))
         return out
 
     def free(self, array: Any) -> None:

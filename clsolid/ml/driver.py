@@ -75,18 +75,20 @@ class Balance:
     are counted without listing them.
     """
 
-    def __init__(self, model: ScaleModel, beta: float, volume: np.ndarray, bias: np.ndarray) -> None:
+    def __init__(self, model: ScaleModel, beta: float, volume: np.ndarray, bias: np.ndarray,
+                 scratch: Scratch | None = None) -> None:
         self.model, self.beta = model, beta
+        self.scratch = Scratch() if scratch is None else scratch
         self.pi = label_fractions(model.exemplar, model.labels)
         self.stride = score_stride(model.shape)
         self.bias = bias  # zeros at a scale's start (a coarser scale's labels mean other grey levels)
         self.dtype = np.min_scalar_type(max(model.labels.size - 1, 0))
-        self.index = self._index(volume)  # each voxel's label, kept up to date
+        self.index = self._index(volume, self.scratch.empty(np.size(volume), self.dtype))  # each voxel's label
         self.total = self._count(self.index)
 
-    def _index(self, values: np.ndarray) -> np.ndarray:
+    def _index(self, values: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         flat = np.ravel(values)
-        out = np.empty(flat.size, self.dtype)
+        out = np.empty(flat.size, self.dtype) if out is None else out
         for lo in range(0, flat.size, _INDEX_RUN):  # searchsorted's int64 a run at a time (host memory)
             out[lo:lo + _INDEX_RUN] = nearest_level_index(flat[lo:lo + _INDEX_RUN], self.model.labels)
         return out
@@ -98,8 +100,10 @@ class Balance:
 
     def start_sweep(self, active: np.ndarray) -> None:
         """Count the labels of the voxels this sweep relaxes (*active*), none relaxed yet."""
-        mask = np.ravel(active)
-        self.coming, self.n_coming = self._count(self.index[mask]), int(np.count_nonzero(mask))
+        mask, n = np.ravel(active), self.index.size
+        self.coming = sum((self._count(self.index[lo:lo + _INDEX_RUN][mask[lo:lo + _INDEX_RUN]])
+                           for lo in range(0, n, _INDEX_RUN)), np.zeros(self.model.labels.size, np.int64))
+        self.n_coming = int(np.count_nonzero(mask))
         self.swept, self.n_swept = self.coming.copy(), self.n_coming
 
     def after(self, backend: Any, updated: np.ndarray) -> np.ndarray:
@@ -268,7 +272,7 @@ def run_ml(
     annealing = params.relaxation == "annealing"
     pruned = params.likelihood == "pruned"
     n_sweeps = params.sweeps or params.max_sweeps
-    coarse = None
+    coarse = active = None
     timings: dict = {"scales": []}
     if resume is not None:
         timings = {"scales": [dict(r) for r in resume.timings["scales"]]}
@@ -291,7 +295,7 @@ def run_ml(
             if model.level == 0:
                 scratch.free(base)
                 base = None  # the finest scale has taken all it needs from the random start
-            inherited = temp == 0
+            inherited = scratch.apply(lambda t: t == 0, bool, temp)
             if annealing:
                 temp[...] = 0.0  # no pixel temperatures: every neighbour's weight 1 - t is 1
             t_init = params.anneal_start if annealing else float(temp.sum())
@@ -302,7 +306,7 @@ def run_ml(
                       "n_sites": model.n_sites, "n_sets": model.n_sets, "initial_temperature": t_init,
                       "temperatures": [], "visited": [], "sweep_seconds": []}
         backend.start_scale(model, vol, temp, params, sources=sources)
-        balance = Balance(model, params.balance, vol, bias) if params.balance else None
+        balance = Balance(model, params.balance, vol, bias, scratch) if params.balance else None
         if progress is not None and not annealing:  # the ETA's sweeps, known before they run where affordable
             if affordable(model):
                 visits = forecast_visits(model, temp, inherited, resynth, params.xi, seed, first, n_sweeps,
@@ -314,11 +318,12 @@ def run_ml(
         vol = temp = None
         for sweep in range(first, n_sweeps + 1):
             t_sweep = time.perf_counter()
+            scratch.free(active)  # the last sweep's
             if annealing:
-                active = ~inherited | resynth
+                active = scratch.apply(lambda i: ~i | resynth, bool, inherited)
             else:
-                temp = backend.temperature()
-                active = (temp > 0) | (inherited & resynth)
+                temp = np.asarray(backend.temperature()).reshape(model.shape)
+                active = scratch.apply(lambda t, i: (t > 0) | (i & resynth), bool, temp, inherited)
             backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias)
             order = set_order(model.n_sets, seed, model.level, sweep)
             if balance is not None:
@@ -362,6 +367,9 @@ def run_ml(
                                    exemplar=model.exemplar, volume=lambda: np.array(backend.volume(), copy=True)))
             if done:
                 break
+        for done_with in (inherited, active, balance.index if balance is not None else None):
+            scratch.free(done_with)  # this scale's masks and labels (on disk: their files)
+        active = None
         coarse = np.asarray(backend.volume()).reshape(model.shape)  # float32 on a device, as the state
         record["sweeps"] = len(record["temperatures"])
         record["seconds"] = time.perf_counter() - t_scale
