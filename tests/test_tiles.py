@@ -189,9 +189,11 @@ def test_tiled_checkpoint_resumes_identically(tmp_path, device):
         if len(seen) == 4:  # the second sweep of the finest scale
             raise Stop
 
+    (tmp_path / "scratch").mkdir()  # the state on disk, checkpointed from there
     with pytest.raises(Stop):
-        clsolid.synthesize("gravel", (12, 10, 14), tile=5, checkpoint=tmp_path / "run", progress=stop, **kw)
-    (tmp_path / "scratch").mkdir()  # and the state on disk from there on
+        clsolid.synthesize("gravel", (12, 10, 14), tile=5, checkpoint=tmp_path / "run", progress=stop,
+                           scratch=tmp_path / "scratch", **kw)
+    assert list((tmp_path / "scratch").iterdir()) == []  # removed on the way out
     np.testing.assert_array_equal(clsolid.resume(tmp_path / "run", device=device, tile=6, scratch=tmp_path / "scratch"),
                                   whole)
 
