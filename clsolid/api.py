@@ -11,6 +11,7 @@ import numpy as np
 from .errors import InputError
 from .ml.params import MLParams
 from .core.hostmemory import check_host_memory, check_scratch_space, exemplar_terms
+from .core.scratch import Scratch
 from .core.slices import seam_ratio
 from .ml.driver import SweepInfo, SynthesisResult, check_shape, resolve_seed, run_ml
 
@@ -39,7 +40,6 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client", "scratch")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
 _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
-_LABEL_PLANES = 8  # planes of the result made into labels at once
 
 
 def is_reference(device) -> bool:
@@ -99,8 +99,9 @@ def make_backend(device, backend_options: dict):
         from .ml.reference import ReferenceBackend
 
         return ReferenceBackend()
-    from .core.scratch import Scratch
     from .ml.tiled import TiledBackend, check_edge
+
+    store = None if scratch is None else Scratch(scratch)  # checked now; its folder made when first used
 
     if client is not None:
         if tile is None:
@@ -109,12 +110,12 @@ def make_backend(device, backend_options: dict):
         from .ml.distributed import DaskTiles
 
         check_edge(tile)  # before asking the workers anything
-        return TiledBackend(DaskTiles(client, device, **options), tile, Scratch(scratch) if scratch else None)
+        return TiledBackend(DaskTiles(client, device, **options), tile, store)
     from .ml.opencl import CLBackend
     from .core.device import select_device
 
     engine = CLBackend(select_device(device), **options)
-    return engine if tile is None else TiledBackend(engine, tile, Scratch(scratch) if scratch else None)
+    return engine if tile is None else TiledBackend(engine, tile, store)
 
 
 def synthesize(
@@ -401,9 +402,8 @@ def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_outp
     try:
         vol, timings, bandwidths = run_ml(levels_of.labels, shape, params, seed, backend, progress,
                                           checkpoint=hook, resume=state)
-        labels = np.empty(vol.shape, np.uint8 if levels_of.values.size <= 256 else np.uint16)
-        for lo in range(0, vol.shape[0], _LABEL_PLANES):  # no whole float temporary (host memory)
-            labels[lo: lo + _LABEL_PLANES] = np.rint(vol[lo: lo + _LABEL_PLANES])
+        # in memory, a run of planes at a time: no whole float temporary (host memory)
+        labels = Scratch().apply(np.rint, np.uint8 if levels_of.values.size <= 256 else np.uint16, vol)
     finally:
         if scratch is not None:
             scratch.close()

@@ -248,6 +248,7 @@ def test_scratch_space_is_checked_first(device, tmp_path, monkeypatch):
     monkeypatch.setattr(shutil, "disk_usage", lambda path: usage._replace(free=64**3 * SCRATCH_BYTES_PER_VOXEL - 1))
     with pytest.raises(InputError, match=r"64x64x64 block keeps about .* GiB free; free space there"):
         clsolid.synthesize("gravel", (64, 64, 64), tile=16, scratch=tmp_path, device=device)
+    assert list(tmp_path.iterdir()) == []  # refused before anything was allocated: no folder left
     check_scratch_space((63, 64, 64), str(tmp_path))  # fits
 
 

@@ -25,28 +25,33 @@ from typing import Any, Callable
 import numpy as np
 
 from ..errors import InputError
+from .hostmemory import SCRATCH_BYTES_PER_VOXEL
 
 #: Most elements :meth:`Scratch.apply` computes at once.
 _RUN_ELEMENTS = 1 << 22
 
+
 class Scratch:
     """Allocates a run's whole-block arrays in memory (*folder* None) or as files in a fresh
-    folder made under *folder*, removed by :meth:`close` (also on leaving a ``with``)."""
+    folder made under *folder* when the first is allocated (so that a run refused before it
+    allocates leaves nothing behind), removed by :meth:`close` (also on leaving a ``with``)."""
 
     def __init__(self, folder: str | os.PathLike | None = None) -> None:
         self.root = None if folder is None else check_folder(folder)
-        self.folder = None if folder is None else tempfile.mkdtemp(prefix="clsolid-scratch-", dir=self.root)
+        self.folder: str | None = None  # made by the first empty()
         self._count = 0
 
     @property
     def on_disk(self) -> bool:
         """Whether the arrays are files."""
-        return self.folder is not None
+        return self.root is not None
 
     def empty(self, shape: Any, dtype: Any) -> np.ndarray:
         """An uninitialised array (a ``numpy.memmap`` on disk)."""
-        if self.folder is None:
+        if self.root is None:
             return np.empty(shape, dtype)
+        if self.folder is None:
+            self.folder = tempfile.mkdtemp(prefix="clsolid-scratch-", dir=self.root)
         self._count += 1
         path = os.path.join(self.folder, f"array{self._count}.dat")
         return np.memmap(path, dtype=dtype, mode="w+", shape=tuple(np.atleast_1d(shape)))
@@ -103,7 +108,7 @@ def check_folder(folder: str | os.PathLike) -> str:
     path = os.path.abspath(os.fspath(folder))
     if not os.path.isdir(path):
         raise InputError(f"scratch folder {path!r} does not exist; make it first, on a disk with room for the "
-                         "block's state (about 30 bytes a voxel)")
+                         f"block's state (about {SCRATCH_BYTES_PER_VOXEL} bytes a voxel)")
     if not os.access(path, os.W_OK | os.X_OK):
         raise InputError(f"scratch folder {path!r} is not writable; choose another")
     return path

@@ -93,17 +93,18 @@ class Balance:
             out[lo:lo + _INDEX_RUN] = nearest_level_index(flat[lo:lo + _INDEX_RUN], self.model.labels)
         return out
 
-    def _count(self, index: np.ndarray) -> np.ndarray:
+    def _count(self, index: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+        """Each label's count in *index* (only where *mask*, if given), a run at a time:
+        bincount widens to int64, and a masked selection is a copy."""
         n = self.model.labels.size
-        return sum((np.bincount(index[lo:lo + _INDEX_RUN], minlength=n) for lo in range(0, index.size, _INDEX_RUN)),
-                   np.zeros(n, np.int64))  # bincount widens to int64: a run at a time
+        runs = (index[lo:lo + _INDEX_RUN] if mask is None else index[lo:lo + _INDEX_RUN][mask[lo:lo + _INDEX_RUN]]
+                for lo in range(0, index.size, _INDEX_RUN))
+        return sum((np.bincount(run, minlength=n) for run in runs), np.zeros(n, np.int64))
 
     def start_sweep(self, active: np.ndarray) -> None:
         """Count the labels of the voxels this sweep relaxes (*active*), none relaxed yet."""
-        mask, n = np.ravel(active), self.index.size
-        self.coming = sum((self._count(self.index[lo:lo + _INDEX_RUN][mask[lo:lo + _INDEX_RUN]])
-                           for lo in range(0, n, _INDEX_RUN)), np.zeros(self.model.labels.size, np.int64))
-        self.n_coming = int(np.count_nonzero(mask))
+        mask = np.ravel(active)
+        self.coming, self.n_coming = self._count(self.index, mask), int(np.count_nonzero(mask))
         self.swept, self.n_swept = self.coming.copy(), self.n_coming
 
     def after(self, backend: Any, updated: np.ndarray) -> np.ndarray:
