@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 from functools import partial
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -289,8 +289,11 @@ def synthesize(
         and back, so it pays for tiles large enough that compute dominates. ``scratch`` (a
         folder; needs ``tile``) keeps the whole block's state in memory-mapped files in a
         folder made there and removed at the end (``clsolid.core.scratch``), for blocks larger
-        than the host's memory: the same volume, a few bytes a voxel in memory (the result's
-        among them) and about 40 on that disk, which is checked for room first.
+        than the host's memory: the same volume, a few bytes a voxel in memory and about 40 on
+        that disk, which is checked for room first. The result's arrays are then
+        ``numpy.memmap`` files there too, nameless (they go when the arrays do), so a result
+        larger than memory is returned, and :func:`clsolid.volumeio.save_volume` writes it a
+        plane at a time.
 
         Relaxation (thesis_spec §2.3): ``relaxation`` is ``"gibbs"`` (default: each visited
         voxel draws its label from the combined, normalised LCPDF; per-voxel temperatures,
@@ -402,15 +405,20 @@ def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_outp
     try:
         vol, timings, bandwidths = run_ml(levels_of.labels, shape, params, seed, backend, progress,
                                           checkpoint=hook, resume=state)
-        # in memory, a run of planes at a time: no whole float temporary (host memory)
-        labels = Scratch().apply(np.rint, np.uint8 if levels_of.values.size <= 256 else np.uint16, vol)
+        # a run of planes at a time: no whole temporary (host memory); with the state on disk
+        # the result is there too, in files that go when its arrays do
+        store = scratch if on_disk else Scratch()
+        labels = store.apply(np.rint, np.uint8 if levels_of.values.size <= 256 else np.uint16, vol, kept=True)
+        values = None
+        if full_output or output != "labels":
+            values = store.apply(levels_of.to_values, levels_of.values.dtype, labels, kept=True)
     finally:
         if scratch is not None:
             scratch.close()
     if not full_output:
-        return labels if output == "labels" else levels_of.to_values(labels)
+        return labels if output == "labels" else values
     effective = {"method": "ml", **params.to_dict(), "bandwidth_effective": bandwidths, "shape": list(shape)}
-    return SynthesisResult(volume=levels_of.to_values(labels), labels=labels,
+    return SynthesisResult(volume=values, labels=labels,
                            exemplar=levels_of.to_values(levels_of.labels), exemplar_labels=levels_of.labels,
                            level_values=levels_of.values, values_exact=levels_of.exact,
                            seed=seed, params=effective, device=backend.name, timings=timings)
@@ -456,16 +464,22 @@ def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | N
     from .ml.model import scale_shape
 
     _check_output(output)
-    meta, params, image, state = load_run(checkpoint)
-    shape = check_shape(tuple(meta["shape"]))
-    levels_of = level_map(image, params.levels)
-    level = params.scales - 1 - state.scale
-    expected = scale_shape(shape, level) if 0 <= level < params.scales else None
-    if expected is None or state.volume.size != int(np.prod(expected)):
-        raise CheckpointError(f"{checkpoint}: the saved volume ({state.volume.size} voxels) does not fit scale "
-                              f"{state.scale + 1} of a {shape} run: the checkpoint is corrupt")
     backend = make_backend(device, {k: v for k, v in (("tile", tile), ("client", client), ("scratch", scratch))
                                     if v is not None})
+    store = getattr(backend, "scratch", None)
+    try:  # with a scratch folder, the checkpoint's whole-block arrays are read into its files
+        meta, params, image, state = load_run(checkpoint, np.empty if store is None else _large_on(store))
+        shape = check_shape(tuple(meta["shape"]))
+        level = params.scales - 1 - state.scale
+        expected = scale_shape(shape, level) if 0 <= level < params.scales else None
+        if expected is None or state.volume.size != int(np.prod(expected)):
+            raise CheckpointError(f"{checkpoint}: the saved volume ({state.volume.size} voxels) does not fit scale "
+                                  f"{state.scale + 1} of a {shape} run: the checkpoint is corrupt")
+    except BaseException:
+        if store is not None:
+            store.close()
+        raise
+    levels_of = level_map(image, params.levels)
     if backend.name != meta.get("device"):
         log.warning("resuming on %s a run begun on %s: the volume will differ from the uninterrupted one",
                     backend.name, meta.get("device"))
@@ -473,6 +487,16 @@ def resume(checkpoint, *, device=None, progress: Callable[[SweepInfo], None] | N
     hook = Checkpointer(checkpoint, check_every(checkpoint_every), run_meta, image)
     log.info("resuming %s at scale %d, after sweep %d", checkpoint, state.scale + 1, state.sweep)
     return _run_ml(levels_of, shape, params, int(meta["seed"]), backend, progress, output, full_output, hook, state)
+
+
+#: Elements from which a resumed checkpoint's array is read into the scratch folder.
+_SCRATCH_LEAST = 1 << 16
+
+
+def _large_on(store: Scratch) -> Callable[[tuple, Any], np.ndarray]:
+    """``empty(shape, dtype)`` that puts whole-block arrays on *store* and small ones in memory."""
+    return lambda shape, dtype: (store.empty(shape, dtype) if int(np.prod(shape)) >= _SCRATCH_LEAST
+                                 else np.empty(shape, dtype))
 
 
 def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, levels, rng, device, progress,

@@ -203,7 +203,8 @@ def _add_synth(sub) -> None:
     p.add_argument("--scratch", type=Path, default=None, metavar="DIR",
                    help="ml, with --tile: keep the block's state in memory-mapped files in a folder made in DIR "
                         "(removed at the end), for blocks larger than the host's memory: a few bytes a voxel stay "
-                        "in memory and about 40 go to the disk; the same volume")
+                        "in memory and about 40 go to the disk; the same volume, written to --output a plane at "
+                        "a time")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="ml, with --tile: run the tiles of every set on the workers of the Dask scheduler at ADDRESS "
                         "(each worker uses its own OpenCL device, --device naming it); needs clsolid[dask]")

@@ -14,7 +14,7 @@ import os
 import pathlib
 import warnings
 from numbers import Real
-from typing import Any, Union
+from typing import Any, Iterator, Union
 
 import numpy as np
 import tifffile
@@ -315,31 +315,49 @@ def _check_volume(volume: Any) -> np.ndarray:
     return volume
 
 
-def _narrow_labels(volume: np.ndarray) -> np.ndarray | None:
-    """Integer/bool volume as ``uint8``/``uint16`` if its values fit, else ``None``."""
+def _narrow_dtype(volume: np.ndarray) -> np.dtype | None:
+    """The dtype an integer/bool volume is written as: ``uint8``/``uint16`` if its values
+    fit, else ``None`` (a reduction: no copy of a large volume is made)."""
     if volume.dtype == np.uint8 or volume.dtype == np.uint16:
-        return volume
+        return volume.dtype
     if volume.dtype.kind == "b":
-        return volume.astype(np.uint8)
+        return np.dtype(np.uint8)
     lo, hi = int(volume.min()), int(volume.max())
     if lo >= 0 and hi < 256:
-        return volume.astype(np.uint8)
+        return np.dtype(np.uint8)
     if lo >= 0 and hi < 65536:
-        return volume.astype(np.uint16)
+        return np.dtype(np.uint16)
     return None
 
 
-def _tiff_ready(volume: np.ndarray) -> np.ndarray:
-    """Convert ``volume`` to an ImageJ sample type (uint8, uint16 or float32)."""
+def _tiff_dtype(volume: np.ndarray) -> np.dtype:
+    """The ImageJ sample type (uint8, uint16 or float32) ``volume`` is written as."""
     if volume.dtype.kind == "f":
-        return volume.astype(np.float32, copy=False)
-    narrowed = _narrow_labels(volume)
+        return np.dtype(np.float32)
+    narrowed = _narrow_dtype(volume)
     if narrowed is None:
         raise InputError(
             f"volume values span {int(volume.min())}..{int(volume.max())} (dtype {volume.dtype}), which does not "
             "fit ImageJ's uint8/uint16 samples; rescale to 0..65535, convert to float32, or save as .npy"
         )
     return narrowed
+
+
+def _planes(volume: np.ndarray, dtype: np.dtype) -> Iterator[np.ndarray]:
+    """The Z planes of *volume* as contiguous *dtype* arrays, one at a time: a volume larger
+    than memory (a memory-mapped result) is written without a whole copy of it."""
+    for plane in volume:
+        yield np.ascontiguousarray(plane, dtype=dtype)
+
+
+def _write_npy(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype) -> None:
+    """Write *volume* as *dtype* to a ``.npy`` file, a plane at a time."""
+    header = {"descr": np.lib.format.dtype_to_descr(dtype), "fortran_order": False, "shape": volume.shape}
+    # Through a file object: np.save on a name appends ".npy" unless it ends in lower-case ".npy".
+    with open(path, "wb") as fh:
+        np.lib.format.write_array_header_1_0(fh, header)
+        for plane in _planes(volume, dtype):
+            fh.write(plane.tobytes())
 
 
 # --------------------------------------------------------------------------- public API
@@ -405,23 +423,23 @@ def save_volume(
     meta_json = _check_metadata(metadata)
     p.parent.mkdir(parents=True, exist_ok=True)
     if suffix == ".npy":
-        narrowed = vol if vol.dtype.kind == "f" else _narrow_labels(vol)
-        # Through a file object: np.save on a name appends ".npy" unless it ends in lower-case ".npy".
-        with open(p, "wb") as fh:
-            np.save(fh, vol if narrowed is None else narrowed, allow_pickle=False)
+        narrowed = vol.dtype if vol.dtype.kind == "f" else _narrow_dtype(vol)
+        _write_npy(p, vol, vol.dtype if narrowed is None else narrowed)
         return p
-    _write_imagej(p, _tiff_ready(vol), spacing, unit, meta_json)
+    _write_imagej(p, vol, _tiff_dtype(vol), spacing, unit, meta_json)
     return p
 
 
 def _write_imagej(
     path: pathlib.Path,
     volume: np.ndarray,
+    dtype: np.dtype,
     spacing: tuple[float, float, float] | None,
     unit: str,
     meta_json: str | None,
 ) -> None:
-    """Write an ImageJ ZYX hyperstack with optional calibration and metadata."""
+    """Write an ImageJ ZYX hyperstack of *dtype* samples, with optional calibration and
+    metadata, a plane at a time."""
     props = {_PROP_AXES: "ZYX"}
     if meta_json is not None:
         props[_PROP_METADATA] = meta_json
@@ -434,12 +452,14 @@ def _write_imagej(
         kwargs["resolution"] = (1.0 / x, 1.0 / y)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        tifffile.imwrite(path, np.ascontiguousarray(volume), imagej=True, metadata=ij_meta, **kwargs)
+        tifffile.imwrite(path, _planes(volume, dtype), shape=volume.shape, dtype=dtype, imagej=True,
+                         metadata=ij_meta, **kwargs)
     for w in caught:  # tifffile's own note on the large-file form says nothing a user can act on
         if "truncating ImageJ file" in str(w.message):
             warnings.warn(LargeTiffWarning(
-                f"{path}: {volume.nbytes / 2**30:.1f} GiB of samples, above the 4 GiB of a classic TIFF, written "
-                "in ImageJ's large-file form (one directory, the planes stored contiguously): ImageJ/Fiji, "
+                f"{path}: {volume.size * dtype.itemsize / 2**30:.1f} GiB of samples, above the 4 GiB of a classic "
+                "TIFF, written in ImageJ's large-file form (one directory, the planes stored contiguously): "
+                "ImageJ/Fiji, "
                 "tifffile and clsolid read it whole, other TIFF readers only its first plane; save as .npy for "
                 "those"), stacklevel=3)
         else:

@@ -1,13 +1,16 @@
 """Checkpoint and resume (issue 12, point 3): a resumed run gives the identical volume, and a
 bad checkpoint gets a clear error, never a silent restart."""
 
+import hashlib
 import json
+import zipfile
 
 import numpy as np
 import pytest
 
 import clsolid
 from clsolid.cli import EXIT_USAGE, main
+from clsolid.core import checkpoint as checkpoint_module
 from clsolid.core.checkpoint import META, STATE, CheckpointError, read_checkpoint, write_checkpoint
 
 KW = dict(neighborhood=5, scales=2, rng=4)
@@ -87,6 +90,35 @@ def test_bad_checkpoints_are_refused(tmp_path, device):
     with pytest.raises(CheckpointError, match="checkpoint_every"):
         clsolid.synthesize("gravel", (8, 8, 8), checkpoint=tmp_path / "x", checkpoint_every=-1, device=device)
     assert isinstance(CheckpointError("x"), clsolid.InputError)
+
+
+def test_arrays_are_read_into_what_the_caller_gives(tmp_path, monkeypatch):
+    """read_checkpoint reads each array a block at a time into ``empty(shape, dtype)`` (a
+    scratch file's, when a large block resumes); a truncated array is a corrupt checkpoint."""
+    arrays = {"volume": np.arange(60, dtype=np.float32).reshape(3, 4, 5), "mask": np.arange(7) % 2 == 0,
+              "bias": np.array([0.5, -1.0])}
+    write_checkpoint(tmp_path / "c", {"method": "ml"}, arrays)
+    made = []
+
+    def empty(shape, dtype):
+        made.append((shape, dtype))
+        return np.memmap(tmp_path / f"a{len(made)}.dat", dtype=dtype, mode="w+", shape=shape)
+
+    monkeypatch.setattr(checkpoint_module, "_READ_BLOCK", 16)  # several blocks an array
+    meta, back = read_checkpoint(tmp_path / "c", empty)
+    assert meta == {"method": "ml"} and sorted(made) == sorted((a.shape, a.dtype) for a in arrays.values())
+    for name, a in arrays.items():
+        assert isinstance(back[name], np.memmap) and back[name].dtype == a.dtype
+        np.testing.assert_array_equal(back[name], a)
+    short = tmp_path / "short"  # an array cut short, with a digest that matches it
+    short.mkdir()
+    with zipfile.ZipFile(tmp_path / "c" / STATE) as z, zipfile.ZipFile(short / STATE, "w") as out:
+        out.writestr("volume.npy", z.read("volume.npy")[:-8])
+    meta_text = json.loads((tmp_path / "c" / META).read_text())
+    meta_text["state_sha256"] = hashlib.sha256((short / STATE).read_bytes()).hexdigest()
+    (short / META).write_text(json.dumps(meta_text))
+    with pytest.raises(CheckpointError, match="ends early"):
+        read_checkpoint(short)
 
 
 def test_cli_checkpoint_and_resume(tmp_path, device):

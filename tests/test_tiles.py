@@ -10,7 +10,8 @@ import clsolid
 from clsolid.cli import EXIT_USAGE, main
 from clsolid.core.hostmemory import (BYTES_PER_EXEMPLAR_TERM, ENV, SCRATCH_BYTES_PER_VOXEL, check_scratch_space,
                                      exemplar_terms)
-from clsolid.core import scratch as scratch_module
+from clsolid import api as api_module
+from clsolid.core import checkpoint as checkpoint_module, scratch as scratch_module
 from clsolid.core.scratch import Scratch
 from clsolid.core.tiles import Tiling, gather, split_axis
 from clsolid.errors import DeviceMemoryError, HostMemoryError, InputError
@@ -175,7 +176,7 @@ def test_cli_tile_flag(tmp_path, device):
     assert main(["synth", "gravel", "-o", str(tmp_path / "d.npy"), "--method", "wl", "--tile", "5", "-q"]) == EXIT_USAGE
 
 
-def test_tiled_checkpoint_resumes_identically(tmp_path, device):
+def test_tiled_checkpoint_resumes_identically(tmp_path, device, monkeypatch):
     """A tiled run's checkpoint holds the whole arrays: it resumes, tiled, to the one-piece volume."""
     kw = dict(neighborhood=5, scales=2, rng=4, builtin_size=16, sweeps=3, likelihood="pruned", device=device)
     whole = clsolid.synthesize("gravel", (12, 10, 14), **kw)
@@ -194,8 +195,14 @@ def test_tiled_checkpoint_resumes_identically(tmp_path, device):
         clsolid.synthesize("gravel", (12, 10, 14), tile=5, checkpoint=tmp_path / "run", progress=stop,
                            scratch=tmp_path / "scratch", **kw)
     assert list((tmp_path / "scratch").iterdir()) == []  # removed on the way out
+    read = []  # the checkpoint's arrays go to the scratch folder as they are read (a small block: all of them)
+    monkeypatch.setattr(api_module, "_SCRATCH_LEAST", 0)
+    monkeypatch.setattr(checkpoint_module, "_read_member",
+                        lambda *a, real=checkpoint_module._read_member: read.append(real(*a)) or read[-1])
     np.testing.assert_array_equal(clsolid.resume(tmp_path / "run", device=device, tile=6, scratch=tmp_path / "scratch"),
                                   whole)
+    assert read and all(isinstance(a, np.memmap) for a in read)
+    assert list((tmp_path / "scratch").iterdir()) == []
 
 
 # -- the state on disk (scratch) -----------------------------------------------------------------
@@ -222,8 +229,10 @@ def test_state_on_disk_gives_the_same_volume(device, labels, case, tmp_path):
 def test_scratch_through_the_api_and_the_cli(device, tmp_path):
     kw = dict(neighborhood=5, scales=2, rng=4, builtin_size=16, sweeps=2, device=device)
     whole = clsolid.synthesize("gravel", (12, 10, 14), **kw)
-    np.testing.assert_array_equal(clsolid.synthesize("gravel", (12, 10, 14), tile=5, scratch=tmp_path, **kw), whole)
-    assert os.listdir(tmp_path) == []  # its folder removed
+    on_disk = clsolid.synthesize("gravel", (12, 10, 14), tile=5, scratch=tmp_path, full_output=True, **kw)
+    assert isinstance(on_disk.volume, np.memmap) and isinstance(on_disk.labels, np.memmap)  # the result there too
+    np.testing.assert_array_equal(on_disk.volume, whole)
+    assert os.listdir(tmp_path) == []  # its folder removed, the result's files nameless
     with pytest.raises(InputError, match="give tile=N too"):
         clsolid.synthesize("gravel", (12, 10, 14), scratch=tmp_path, **kw)
     with pytest.raises(InputError, match="does not exist"):
@@ -279,4 +288,4 @@ def test_the_host_check_counts_what_stays_in_memory(device, tmp_path, monkeypatc
     monkeypatch.setenv(ENV, str(exemplar + int(np.prod(shape)) * 20))  # 20 bytes a voxel
     with pytest.raises(HostMemoryError, match="--scratch DIR"):
         clsolid.synthesize("gravel", shape, **kw)
-    assert clsolid.synthesize("gravel", shape, scratch=tmp_path, **kw).shape == shape  # 8 in memory
+    assert clsolid.synthesize("gravel", shape, scratch=tmp_path, **kw).shape == shape  # 4 in memory

@@ -13,8 +13,9 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import zipfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -52,8 +53,32 @@ def write_checkpoint(folder: str | os.PathLike, meta: dict[str, Any], arrays: di
     return d
 
 
-def read_checkpoint(folder: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    """The meta (as given to :func:`write_checkpoint`) and arrays of a checkpoint folder.
+#: Bytes of an array read from ``state.npz`` at once.
+_READ_BLOCK = 1 << 24
+
+
+def _read_member(z: zipfile.ZipFile, name: str, empty: Callable[[tuple, np.dtype], np.ndarray]) -> np.ndarray:
+    """Array *name* of ``state.npz`` (an ``.npy`` file in the zip), read into ``empty(shape, dtype)``."""
+    with z.open(name) as f:
+        version = np.lib.format.read_magic(f)
+        read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+        shape, fortran, dtype = read_header(f)
+        if fortran or dtype.hasobject:
+            raise ValueError(f"{name} is not a C-ordered array of numbers")
+        out = empty(shape, dtype)
+        raw = out.reshape(-1).view(np.uint8)
+        for lo in range(0, raw.size, _READ_BLOCK):
+            part = raw[lo: lo + _READ_BLOCK]
+            if f.readinto(memoryview(part)) != part.size:
+                raise ValueError(f"{name} ends early")
+    return out
+
+
+def read_checkpoint(folder: str | os.PathLike, empty: Callable[[tuple, np.dtype], np.ndarray] = np.empty
+                    ) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """The meta (as given to :func:`write_checkpoint`) and arrays of a checkpoint folder,
+    each read a block at a time into ``empty(shape, dtype)`` (such as a scratch folder's
+    :meth:`~clsolid.core.scratch.Scratch.empty`, so that a block larger than memory resumes).
 
     Raises
     ------
@@ -75,8 +100,8 @@ def read_checkpoint(folder: str | os.PathLike) -> tuple[dict[str, Any], dict[str
         raise CheckpointError(f"{d / STATE} does not match the digest in {META}: the checkpoint is corrupt "
                               "(it was changed or only partly copied)")
     try:
-        with np.load(d / STATE, allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files}
-    except (OSError, ValueError) as exc:
+        with zipfile.ZipFile(d / STATE) as z:
+            arrays = {name.removesuffix(".npy"): _read_member(z, name, empty) for name in z.namelist()}
+    except (OSError, ValueError, zipfile.BadZipFile) as exc:
         raise CheckpointError(f"{d / STATE} cannot be read ({exc}): the checkpoint is corrupt") from None
     return {k: v for k, v in meta.items() if k not in ("format", "state_sha256")}, arrays

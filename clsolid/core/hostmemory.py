@@ -23,10 +23,11 @@ from ..exemplar import window_grid
 #: ``chen-wang`` 81 (their estimate keeps 50 %). The drivers hold no whole-block index
 #: arrays (each conflict-free set is generated when it is relaxed,
 #: :func:`clsolid.core.schedule.colour_set`). With the state in a scratch folder
-#: (:mod:`clsolid.core.scratch`) what stays in memory grew by 4.1 bytes a voxel (traced, from
-#: 40^3 to 64^3: a scale's ``+in`` mask, a set's indices, the result's labels and values); the
+#: (:mod:`clsolid.core.scratch`), the result's arrays and the ``+in`` mask there too, what
+#: stays in memory grew by 1.2 bytes a voxel (traced, from 40^3 to 64^3, the buffers bounded
+#: in size held small: a conflict-free set's indices, the views' scores of a tile); the
 #: files' pages count in the resident size too, but the system pages them out as it needs.
-BYTES_PER_VOXEL = {"ml": 48, "ml-scratch": 8, "search": 120}
+BYTES_PER_VOXEL = {"ml": 48, "ml-scratch": 4, "search": 120}
 #: Disk bytes a voxel of a tiled likelihood run with a scratch folder takes there at its
 #: peak (:mod:`clsolid.core.scratch`): the random start (4) and the finest scale's start state
 #: (4 + 8) beside the back end's state (4 + 4 + 4 a view), and the coarser scales' 1/7 more.

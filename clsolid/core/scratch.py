@@ -6,8 +6,10 @@ and the start state beside them; the driver's trusted and visited masks and the 
 labels, a byte a voxel each. In memory that bounds the block by the host's memory
 (512^3 takes about 6 GB, 1024^3 about 48). With a scratch folder those arrays are
 ``numpy.memmap`` files there instead, which the operating system pages in and out: the block
-is bounded by the disk, and by the memory the arrays that stay in memory take (about 4 bytes
-a voxel; README, Using it). The arrays are the same either way, so the volume is too.
+is bounded by the disk, and by the memory the arrays that stay in memory take (about a byte
+a voxel; README, Using it). The arrays are the same either way, so the volume is too. The
+run's result is made there as well, in nameless files that live as long as its arrays
+(:func:`kept_memmap`), and :func:`clsolid.volumeio.save_volume` writes it a plane at a time.
 
 Every conflict-free set spreads over the whole block, so a sweep reads and writes the whole
 state once per set; where the state is larger than the memory left for the page cache each
@@ -46,10 +48,13 @@ class Scratch:
         """Whether the arrays are files."""
         return self.root is not None
 
-    def empty(self, shape: Any, dtype: Any) -> np.ndarray:
-        """An uninitialised array (a ``numpy.memmap`` on disk)."""
+    def empty(self, shape: Any, dtype: Any, kept: bool = False) -> np.ndarray:
+        """An uninitialised array (a ``numpy.memmap`` on disk). A *kept* one outlives the
+        folder (a run's result): see :func:`kept_memmap`."""
         if self.root is None:
             return np.empty(shape, dtype)
+        if kept:
+            return kept_memmap(self.root, shape, dtype)
         if self.folder is None:
             self.folder = tempfile.mkdtemp(prefix="clsolid-scratch-", dir=self.root)
         self._count += 1
@@ -69,10 +74,10 @@ class Scratch:
         out[...] = source
         return out
 
-    def apply(self, fn: Callable[..., np.ndarray], dtype: Any, *arrays: np.ndarray) -> np.ndarray:
-        """``fn(*arrays)`` as a new array of *dtype*, computed a run of planes (first axis) at
-        a time, so that no whole temporary of ``fn``'s is made."""
-        out = self.empty(arrays[0].shape, dtype)
+    def apply(self, fn: Callable[..., np.ndarray], dtype: Any, *arrays: np.ndarray, kept: bool = False) -> np.ndarray:
+        """``fn(*arrays)`` as a new array of *dtype* (*kept*: as :meth:`empty`), computed a run
+        of planes (first axis) at a time, so that no whole temporary of ``fn``'s is made."""
+        out = self.empty(arrays[0].shape, dtype, kept)
         plane = max(1, int(np.prod(arrays[0].shape[1:])))
         run = max(1, _RUN_ELEMENTS // plane)
         for lo in range(0, arrays[0].shape[0], run):
@@ -100,6 +105,15 @@ class Scratch:
 
     def __exit__(self, *exc: Any) -> None:
         self.close()
+
+
+def kept_memmap(root: str, shape: Any, dtype: Any) -> np.memmap:
+    """A ``numpy.memmap`` on a new temporary file in *root* that lives as long as the array
+    does (the mapping holds its own handle): a result larger than memory, which the caller
+    saves, or drops, when it likes. The file has no name in *root* (POSIX; on Windows it is
+    deleted when the last handle closes), so even a killed process leaves nothing behind."""
+    with tempfile.TemporaryFile(prefix="clsolid-result-", dir=root) as handle:
+        return np.memmap(handle, dtype=dtype, mode="w+", shape=tuple(np.atleast_1d(shape)))
 
 
 def check_folder(folder: str | os.PathLike) -> str:

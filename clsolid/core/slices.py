@@ -114,7 +114,7 @@ def seam_free(n: int, shift: int, size: int, band: int) -> np.ndarray:
 
 
 def insert_slices(vol: np.ndarray, labels_img: np.ndarray, plan: Any, level: int, seed: int,
-                  full_shape: tuple[int, int, int]) -> np.ndarray:
+                  full_shape: tuple[int, int, int], mask: np.ndarray | None = None) -> np.ndarray:
     """``+in``: tile the exemplar onto the ``+in`` slices of each constrained view.
 
     Called at every scale with that scale's exemplar: the depths (:func:`inserted_depths`
@@ -127,11 +127,12 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, plan: Any, level: int
     so that no slice starts as one window (the relaxation sews the seams). Otherwise, where
     a slice tiles the exemplar across its edge, ``seam_gap`` pixels on each side of the seam
     (at least 1 at coarser scales) are left as they were (:data:`SEAM_GAP`). Returns the mask
-    of inserted voxels; they start each scale trusted (t = 0), like inherited voxels: under
+    of inserted voxels (marked in *mask*, an array of False of *vol*'s shape such as a scratch
+    file's, if given); they start each scale trusted (t = 0), like inherited voxels: under
     ICM a voxel at t = 1 ignores its neighbours, so untrusted slices would be overwritten
     unseen.
     """
-    mask = np.zeros(vol.shape, bool)
+    mask = np.zeros(vol.shape, bool) if mask is None else mask
     step = 2 ** (plan.scales - 1 - level)
     shift_rng = np.random.default_rng([seed, 0x1A5E])  # the same draws at every scale
     ex_slots = np.array([-(-n // step) for n in labels_img.shape])

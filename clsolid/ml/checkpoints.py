@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import os
 import time
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -43,15 +43,17 @@ def check_every(value: Any) -> float:
     return float(value)
 
 
-def load_run(folder: str | os.PathLike) -> tuple[dict[str, Any], MLParams, np.ndarray, RunState]:
-    """The description, parameters, exemplar and state of a likelihood run's checkpoint.
+def load_run(folder: str | os.PathLike, empty: Callable[[tuple, np.dtype], np.ndarray] = np.empty
+             ) -> tuple[dict[str, Any], MLParams, np.ndarray, RunState]:
+    """The description, parameters, exemplar and state of a likelihood run's checkpoint, its
+    arrays made by *empty* (:func:`clsolid.core.checkpoint.read_checkpoint`).
 
     Raises
     ------
     CheckpointError
         Not a checkpoint, corrupt, or not of a likelihood run.
     """
-    meta, arrays = read_checkpoint(folder)
+    meta, arrays = read_checkpoint(folder, empty)
     if meta.get("method") != "ml":
         raise CheckpointError(f"{folder} is a checkpoint of method {meta.get('method')!r}; only 'ml' runs resume")
     missing = {"exemplar", "volume", "temperature", "inherited", "bias", "scalars", "position"} - set(arrays)

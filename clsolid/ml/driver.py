@@ -45,8 +45,10 @@ def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, 
             vol[::2, ::2, ::2] = coarse
         # Only the voxel at the even corner is inherited (t = 0), under 1/8 and 8/8 alike.
         temp[::2, ::2, ::2] = 0.0
-    inserted = insert_slices(vol, model.exemplar, params, model.level, seed, base.shape)
-    temp[inserted] = 0.0
+    inserted = insert_slices(vol, model.exemplar, params, model.level, seed, base.shape,
+                             scratch.full(model.shape, False, bool))
+    np.copyto(temp, 0.0, where=inserted)
+    scratch.free(inserted)
     return vol, temp
 
 
@@ -232,7 +234,7 @@ class RunState:
     def from_arrays(cls, a: dict[str, np.ndarray], timings: dict) -> "RunState":
         scale, sweep, done = (int(v) for v in a["position"])
         t_init, target, t_now = (float(v) for v in a["scalars"])
-        return cls(scale, sweep, bool(done), a["volume"], a["temperature"], a["inherited"].astype(bool),
+        return cls(scale, sweep, bool(done), a["volume"], a["temperature"], np.asarray(a["inherited"], bool),
                    t_init, target, t_now, a["bias"], timings, a.get("sources"))
 
 
@@ -278,7 +280,7 @@ def run_ml(
     if resume is not None:
         timings = {"scales": [dict(r) for r in resume.timings["scales"]]}
         if resume.done:  # the checkpoint ended a scale: the next one starts from its volume
-            coarse = np.asarray(resume.volume, dtype=np.float64).reshape(models[resume.scale].shape)
+            coarse = np.asarray(resume.volume).reshape(models[resume.scale].shape)
     for i, model in enumerate(models):
         if resume is not None and (i < resume.scale or (i == resume.scale and resume.done)):
             continue
