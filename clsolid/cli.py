@@ -48,7 +48,8 @@ def _add_synth(sub) -> None:
                        description="Grow a solid texture whose slices look like EXEMPLAR (NP-MRF maximum likelihood).")
     p.add_argument("exemplar", nargs="?", default="brick",
                    help="image (.png/.tif/.npy) or built-in name: brick, grass, gravel (default: brick)")
-    p.add_argument("-o", "--output", required=True, type=Path, help="volume to write: .tif (ImageJ, ZYX) or .npy")
+    p.add_argument("-o", "--output", required=True, type=Path,
+                   help="volume to write: .tif (ImageJ, ZYX), .ome.tif (OME-TIFF, BigTIFF above 4 GiB) or .npy")
     p.add_argument("--shape", nargs=3, type=int, default=(64, 64, 64), metavar=("Z", "Y", "X"),
                    help="volume size (default 64 64 64)")
     p.add_argument("--preset", choices=tuple(PRESETS), default=None,
@@ -480,7 +481,7 @@ def cmd_synth(args) -> int:
     if args.preview is not None and args.preview.suffix.lower() != ".png":
         raise InputError(f"--preview {args.preview} must end in .png")
     voxel_size, unit, voxel_from = _voxel_size(args)
-    check_calibration(voxel_size, unit or "um")  # now, not after the run
+    check_calibration(voxel_size, unit or "um", args.output)  # now, not after the run
     _check_method_flags(args)
     if args.resume is not None:
         _check_resume_flags(args)

@@ -1,7 +1,9 @@
 """Reading and writing volumes.
 
 Volumes are ``(Z, Y, X)`` arrays. TIFF output is an ImageJ hyperstack so that Fiji
-opens it as a z-stack with the right voxel size; ``.npy`` keeps the bare array.
+opens it as a z-stack with the right voxel size, or, named ``.ome.tif``, an OME-TIFF (a
+BigTIFF above 4 GiB, which every reader reads whole); ``.npy`` keeps the bare array. All
+are written a plane at a time.
 Label volumes (integer grey-level indices) are narrowed to ``uint8``/``uint16``
 because those, with ``float32``, are the only sample types ImageJ understands.
 """
@@ -28,6 +30,20 @@ PathLike = Union[str, "os.PathLike[str]"]
 VOLUME_WRITE_SUFFIXES = (".tif", ".tiff", ".npy")
 #: Extensions :func:`load_volume` can read.
 VOLUME_READ_SUFFIXES = (".tif", ".tiff", ".npy", ".png")
+
+#: Names :func:`save_volume` writes as OME-TIFF (BigTIFF above 4 GiB), not ImageJ's TIFF.
+OME_SUFFIXES = (".ome.tif", ".ome.tiff")
+#: OME-XML's length units (its UnitsLength), and the spellings taken for them.
+_OME_UNITS = ("Ym", "Zm", "Em", "Pm", "Tm", "Gm", "Mm", "km", "hm", "dam", "m", "dm", "cm", "mm", "\u00b5m", "nm",
+              "pm", "fm", "am", "zm", "ym", "\u00c5", "thou", "li", "in", "ft", "yd", "mi", "ua", "ly", "pc", "pt",
+              "pixel", "reference frame")
+_OME_ALIASES = {"um": "\u00b5m", "micron": "\u00b5m", "microns": "\u00b5m", "\u03bcm": "\u00b5m",
+                "\\u00B5m": "\u00b5m", "A": "\u00c5", "angstrom": "\u00c5", "\\u00C5": "\u00c5", "inch": "in"}
+#: Bytes of samples above which a TIFF needs 64-bit offsets (tifffile's margin for the rest).
+_CLASSIC_TIFF_BYTES = 2**32 - 2**25
+
+#: The Name of the image of an OME-TIFF that :func:`save_volume` wrote: a ZYX volume.
+_OME_NAME = "clsolid ZYX volume"
 
 # ImageJ "Properties" keys under which we store what the ImageJ header cannot say.
 _PROP_AXES = "clsolid.axes"
@@ -151,6 +167,37 @@ def _ome_pixel_size(xml: str | None) -> tuple[tuple[float, float], str] | None:
     return None
 
 
+def _ome_info(xml: str | None) -> dict[str, Any]:
+    """Voxel size, unit and our metadata from the OME-XML of a stack :func:`save_volume`
+    wrote (or any OME-TIFF: a missing PhysicalSizeZ is 1, as ImageJ's default depth), and
+    ``ome_stack``: whether :func:`save_volume` wrote it (a one-plane stack stays 3D)."""
+    import xml.etree.ElementTree as ElementTree
+
+    info: dict[str, Any] = {}
+    try:
+        root = ElementTree.fromstring(xml or "")
+    except ElementTree.ParseError:
+        return info
+    image = next((el for el in root.iter() if el.tag.rsplit("}", 1)[-1] == "Image"), None)
+    if image is None:
+        return info
+    for el in image:
+        name = el.tag.rsplit("}", 1)[-1]
+        if name == "Description" and el.text:
+            try:
+                info["metadata"] = json.loads(el.text)
+            except ValueError:
+                pass
+        elif name == "Pixels":
+            info["ome_stack"] = image.get("Name") == _OME_NAME
+            found = _ome_pixel_size(xml)
+            if found is not None:
+                (y, x), unit = found
+                z = float(el.get("PhysicalSizeZ", 1.0)) if el.get("PhysicalSizeZUnit", unit) == unit else 1.0
+                info.update(voxel_size=(z, y, x), unit=unit)
+    return info
+
+
 def _tiff_pixel_size(tif: tifffile.TiffFile) -> tuple[tuple[float, float], str] | None:
     """``((y, x), unit)`` from an open TIFF's calibration, or None (see :func:`image_pixel_size`)."""
     info, _ = _tiff_info(tif)
@@ -200,14 +247,17 @@ def _read_tiff(path: pathlib.Path, param: str) -> tuple[np.ndarray, dict]:
         with tifffile.TiffFile(path) as tif:
             data = tif.asarray()
             info, props = _tiff_info(tif)
+            if tif.is_ome and not tif.is_imagej:
+                info.update(_ome_info(tif.ome_metadata))
     except (OSError, ValueError, tifffile.TiffFileError) as exc:
         raise InputError(
             f"{param} {str(path)!r} could not be read as a TIFF file ({exc}); "
             "check that the file is a valid TIFF"
         ) from exc
-    # tifffile squeezes a one-slice stack to 2D; our marker says it was a volume.
-    if data.ndim == 2 and props.get(_PROP_AXES) == "ZYX":
+    # tifffile squeezes a one-slice stack to 2D; our marker (an OME stack's axes) says it was a volume.
+    if data.ndim == 2 and (props.get(_PROP_AXES) == "ZYX" or info.pop("ome_stack", False)):
         data = data[np.newaxis]
+    info.pop("ome_stack", None)
     return data, info
 
 
@@ -272,11 +322,14 @@ def _check_unit(unit: Any) -> str:
     return "".join(c if ord(c) < 128 else f"\\u{ord(c):04X}" for c in unit)
 
 
-def check_calibration(voxel_size: Any, unit: Any) -> None:
+def check_calibration(voxel_size: Any, unit: Any, path: PathLike | None = None) -> None:
     """Raise :class:`~clsolid.errors.InputError` for a *voxel_size* or *unit* that
-    :func:`save_volume` would refuse, so that a run can fail before it starts, not after."""
+    :func:`save_volume` would refuse (writing *path*, if given), so that a run can fail
+    before it starts, not after."""
     _check_voxel_size(voxel_size)
     _check_unit(unit)
+    if voxel_size is not None and path is not None and _is_ome(pathlib.Path(path)):
+        _ome_unit(unit)
 
 
 def _check_metadata(metadata: Any) -> str | None:
@@ -371,7 +424,9 @@ def save_volume(
     unit: str = "um",
     metadata: dict | None = None,
 ) -> pathlib.Path:
-    """Write a ``(Z, Y, X)`` volume to ``.tif``/``.tiff`` or ``.npy``.
+    """Write a ``(Z, Y, X)`` volume to ``.tif``/``.tiff``, ``.ome.tif``/``.ome.tiff`` or
+    ``.npy``, a plane at a time (a memory-mapped volume larger than memory is written without
+    a whole copy).
 
     Parameters
     ----------
@@ -386,7 +441,8 @@ def save_volume(
         Length unit of ``voxel_size``. TIFF only (written only with ``voxel_size``).
     metadata : dict, optional
         JSON-serialisable extra information, stored in the TIFF as the ImageJ
-        property ``clsolid.metadata`` and returned by :func:`load_volume`. TIFF only.
+        property ``clsolid.metadata`` (OME-TIFF: the image's Description) and returned
+        by :func:`load_volume`. TIFF only.
 
     Returns
     -------
@@ -410,6 +466,13 @@ def save_volume(
     :func:`load_volume` read whole and other TIFF readers see as its first
     plane; a :class:`~clsolid.LargeTiffWarning` says so.
 
+    OME-TIFF (a name ending in ``.ome.tif`` or ``.ome.tiff``, any case): the same sample
+    types, one page a plane, and a BigTIFF when the samples pass 4 GiB, which every OME
+    reader (Fiji's Bio-Formats, napari, tifffile, :func:`load_volume`) reads whole. The
+    voxel size is OME's ``PhysicalSizeZ/Y/X`` in ``unit`` spelt as OME-XML spells it
+    (``um`` becomes ``\u00b5m``; a unit OME does not know is refused), the metadata the
+    image's ``Description``.
+
     NPY: integer and bool volumes are narrowed the same way when they fit
     (else kept as they are); floats keep their dtype. A ``.npy`` file holds
     only the array, so ``voxel_size``, ``unit`` and ``metadata`` are validated
@@ -419,25 +482,54 @@ def save_volume(
     suffix = _suffix(p, "path", VOLUME_WRITE_SUFFIXES)
     vol = _check_volume(volume)
     spacing = _check_voxel_size(voxel_size)
-    unit = _check_unit(unit)
+    _check_unit(unit)
     meta_json = _check_metadata(metadata)
     p.parent.mkdir(parents=True, exist_ok=True)
     if suffix == ".npy":
         narrowed = vol.dtype if vol.dtype.kind == "f" else _narrow_dtype(vol)
         _write_npy(p, vol, vol.dtype if narrowed is None else narrowed)
         return p
-    _write_imagej(p, vol, _tiff_dtype(vol), spacing, unit, meta_json)
+    if _is_ome(p):
+        if spacing is not None:
+            _ome_unit(unit)  # before anything is written
+        _write_ome(p, vol, _tiff_dtype(vol), spacing, unit, meta_json)
+    else:
+        _write_imagej(p, vol, _tiff_dtype(vol), spacing, _check_unit(unit), meta_json)
     return p
 
 
-def _write_imagej(
-    path: pathlib.Path,
-    volume: np.ndarray,
-    dtype: np.dtype,
-    spacing: tuple[float, float, float] | None,
-    unit: str,
-    meta_json: str | None,
-) -> None:
+def _is_ome(path: pathlib.Path) -> bool:
+    return path.name.lower().endswith(OME_SUFFIXES)
+
+
+def _ome_unit(unit: str) -> str:
+    """*unit* as OME-XML's unit symbol (``um`` is ``\u00b5m``); refuse one OME does not know."""
+    symbol = _OME_ALIASES.get(unit.strip(), unit.strip())
+    if symbol not in _OME_UNITS:
+        raise InputError(f"unit {unit!r} is not one of OME-XML's length units, which an .ome.tif must use; pass "
+                         "e.g. unit='um', 'nm', 'mm' or 'angstrom', or write an ImageJ .tif")
+    return symbol
+
+
+def _write_ome(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spacing: tuple[float, float, float] | None,
+               unit: str, meta_json: str | None) -> None:
+    """Write an OME-TIFF ZYX stack, a page a plane, written a plane at a time: a BigTIFF when
+    its samples pass 4 GiB, which every OME reader (Fiji's Bio-Formats, napari, tifffile)
+    reads whole. The calibration is OME's PhysicalSize; the metadata its image's Description."""
+    meta: dict[str, Any] = {"axes": "ZYX", "Name": _OME_NAME}
+    if spacing is not None:
+        symbol = _ome_unit(unit)
+        for axis, size in zip("ZYX", spacing):
+            meta.update({f"PhysicalSize{axis}": size, f"PhysicalSize{axis}Unit": symbol})
+    if meta_json is not None:
+        meta["Description"] = meta_json
+    big = volume.size * dtype.itemsize > _CLASSIC_TIFF_BYTES
+    tifffile.imwrite(path, _planes(volume, dtype), shape=volume.shape, dtype=dtype, ome=True, bigtiff=big,
+                     metadata=meta)
+
+
+def _write_imagej(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spacing: tuple[float, float, float] | None,
+                  unit: str, meta_json: str | None) -> None:
     """Write an ImageJ ZYX hyperstack of *dtype* samples, with optional calibration and
     metadata, a plane at a time."""
     props = {_PROP_AXES: "ZYX"}
@@ -461,7 +553,7 @@ def _write_imagej(
                 "TIFF, written in ImageJ's large-file form (one directory, the planes stored contiguously): "
                 "ImageJ/Fiji, "
                 "tifffile and clsolid read it whole, other TIFF readers only its first plane; save as .npy for "
-                "those"), stacklevel=3)
+                "those, or .ome.tif (an OME BigTIFF, which they read whole)"), stacklevel=3)
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 

@@ -211,14 +211,19 @@ def test_ome_exemplar_in_default_micrometres_is_written(tmp_path, device):
     assert main(["synth", str(ex), "-o", str(tmp_path / "v.tif"), *FAST, "-q"]) == 0
     _, info = load_volume(tmp_path / "v.tif")
     assert info["voxel_size"] == pytest.approx((0.2, 0.2, 0.2)) and info["unit"] == "\\u00B5m"
+    assert main(["synth", str(ex), "-o", str(tmp_path / "v.ome.tif"), *FAST, "-q"]) == 0  # OME in, OME out
+    back, info = load_volume(tmp_path / "v.ome.tif")
+    assert info["voxel_size"] == pytest.approx((0.2, 0.2, 0.2)) and info["unit"] == "\u00b5m"
+    np.testing.assert_array_equal(back, load_volume(tmp_path / "v.tif")[0])
 
 
-@pytest.mark.parametrize("flags, needle", [
-    (["--voxel-size", "-1"], "voxel_size must be a positive"),
-    (["--voxel-size", "1", "--unit", "a=b"], "unit must be"),
+@pytest.mark.parametrize("name, flags, needle", [
+    ("v.tif", ["--voxel-size", "-1"], "voxel_size must be a positive"),
+    ("v.tif", ["--voxel-size", "1", "--unit", "a=b"], "unit must be"),
+    ("v.ome.tif", ["--voxel-size", "1", "--unit", "furlong"], "OME-XML's length units"),
 ])
-def test_bad_calibration_fails_before_the_run(tmp_path, capsys, flags, needle):
-    assert main(["synth", "brick", "-o", str(tmp_path / "v.tif"), *FAST, *flags]) == EXIT_USAGE
+def test_bad_calibration_fails_before_the_run(tmp_path, capsys, name, flags, needle):
+    assert main(["synth", "brick", "-o", str(tmp_path / name), *FAST, *flags]) == EXIT_USAGE
     err = capsys.readouterr().err
     assert needle in err and "sweep" not in err  # refused before the first sweep, not after the run
 

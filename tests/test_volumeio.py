@@ -13,7 +13,8 @@ from PIL import Image
 
 from clsolid.core.hostmemory import available_bytes
 from clsolid.errors import InputError, LargeTiffWarning
-from clsolid.volumeio import image_pixel_size, load_volume, save_volume
+from clsolid import volumeio
+from clsolid.volumeio import check_calibration, image_pixel_size, load_volume, save_volume
 
 
 @pytest.fixture
@@ -130,7 +131,7 @@ def test_tifffile_large_file_note_becomes_ours(tmp_path, labels, monkeypatch):
 
 
 @pytest.mark.parametrize("name, dtype", [("f.tif", np.float64), ("i.tif", np.int32), ("i.npy", np.int32),
-                                         ("u.npy", np.uint8)])
+                                         ("u.npy", np.uint8), ("f.ome.tif", np.float64)])
 def test_volumes_are_written_a_plane_at_a_time(tmp_path, name, dtype):
     """No whole copy of the volume (converted or not) is made: a memory-mapped result larger
     than memory can be saved (the traced peak is below half a byte a voxel, the smallest
@@ -144,6 +145,43 @@ def test_volumes_are_written_a_plane_at_a_time(tmp_path, name, dtype):
         tracemalloc.stop()
     assert peak < vol.size // 2
     np.testing.assert_array_equal(load_volume(tmp_path / name)[0], vol)
+
+
+def test_ome_tif_round_trips_with_voxel_size_and_metadata(tmp_path, labels):
+    path = save_volume(tmp_path / "v.OME.tiff", labels, voxel_size=(2.0, 0.5, 0.25), metadata={"seed": 3})
+    data, info = load_volume(path)
+    np.testing.assert_array_equal(data, labels)
+    assert info == {"voxel_size": (2.0, 0.5, 0.25), "unit": "\u00b5m", "metadata": {"seed": 3}}  # OME's symbol
+    assert image_pixel_size(path) == ((0.5, 0.25), "\u00b5m")  # an exemplar's pixel size, as any OME file's
+    with tifffile.TiffFile(path) as tif:
+        assert tif.is_ome and not tif.is_imagej and not tif.is_bigtiff and len(tif.pages) == labels.shape[0]
+    angstrom = save_volume(tmp_path / "a.ome.tif", labels, voxel_size=1.0, unit="angstrom")
+    assert load_volume(angstrom)[1]["unit"] == "\u00c5"
+
+
+def test_ome_tif_one_plane_stays_3d_and_other_ome_images_2d(tmp_path, labels):
+    data, info = load_volume(save_volume(tmp_path / "one.ome.tif", labels[:1]))
+    assert data.shape == (1,) + labels.shape[1:] and info["voxel_size"] is None
+    tifffile.imwrite(tmp_path / "micrograph.ome.tif", labels[0], ome=True)  # another program's 2D image
+    assert load_volume(tmp_path / "micrograph.ome.tif")[0].shape == labels.shape[1:]
+
+
+def test_ome_tif_refuses_a_unit_ome_does_not_know_before_writing(tmp_path, labels):
+    with pytest.raises(InputError, match="OME-XML's length units"):
+        save_volume(tmp_path / "v.ome.tif", labels, voxel_size=1.0, unit="furlong")
+    assert not (tmp_path / "v.ome.tif").exists()
+    with pytest.raises(InputError, match="OME-XML's length units"):
+        check_calibration(1.0, "furlong", tmp_path / "v.ome.tif")
+    check_calibration(1.0, "furlong", tmp_path / "v.tif")  # ImageJ takes any unit
+    check_calibration(None, "furlong", tmp_path / "v.ome.tif")  # no voxel size: no unit written
+
+
+def test_ome_tif_is_bigtiff_above_4_gib(tmp_path, labels, monkeypatch):
+    monkeypatch.setattr(volumeio, "_CLASSIC_TIFF_BYTES", labels.size - 1)  # a small volume stands for a large one
+    path = save_volume(tmp_path / "big.ome.tif", labels, voxel_size=0.5)
+    with tifffile.TiffFile(path) as tif:
+        assert tif.is_bigtiff and tif.is_ome and len(tif.pages) == labels.shape[0]
+    np.testing.assert_array_equal(load_volume(path)[0], labels)
 
 
 def _room(path, need: int) -> bool:
