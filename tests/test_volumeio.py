@@ -190,19 +190,25 @@ def _room(path, need: int) -> bool:
 
 
 @pytest.mark.slow
-def test_tif_above_4_gib_round_trips(tmp_path):
+@pytest.mark.parametrize("name", ["big.tif", "big.ome.tif"])
+def test_tif_above_4_gib_round_trips(tmp_path, name):
     """A volume above a classic TIFF's 4 GiB is written (ImageJ's large-file form, with the
-    warning) and read back whole, voxel size included."""
+    warning; or an OME BigTIFF) and read back whole, voxel size included."""
     shape = (1040, 2048, 2048)  # 4.06 GiB of uint8
     need = int(np.prod(shape))
     if not _room(tmp_path, need):
         pytest.skip("needs about 10 GiB of free memory and 5 GiB of disk")
     vol = np.zeros(shape, np.uint8)
     vol[0, 0, 0], vol[-1, -1, -1], vol[shape[0] // 2, 7, 9] = 1, 2, 3
-    with pytest.warns(LargeTiffWarning):
-        save_volume(tmp_path / "big.tif", vol, voxel_size=(2.0, 0.5, 0.5))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        save_volume(tmp_path / name, vol, voxel_size=(2.0, 0.5, 0.5))
+    assert [w.category for w in caught] == ([] if "ome" in name else [LargeTiffWarning])
     del vol
-    back, meta = load_volume(tmp_path / "big.tif")
+    if "ome" in name:
+        with tifffile.TiffFile(tmp_path / name) as tif:
+            assert tif.is_bigtiff and len(tif.pages) == shape[0]
+    back, meta = load_volume(tmp_path / name)
     assert back.shape == shape
     assert (back[0, 0, 0], back[-1, -1, -1], back[shape[0] // 2, 7, 9]) == (1, 2, 3)
     assert np.count_nonzero(back) == 3
