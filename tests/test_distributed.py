@@ -15,6 +15,7 @@ from clsolid.ml.tiled import TiledBackend
 
 distributed = pytest.importorskip("distributed", reason='Dask is an optional extra: pip install "clsolid[dask]"')
 
+from clsolid.ml import distributed as distributed_module  # noqa: E402 (needs distributed)
 from clsolid.ml.distributed import DaskTiles, device_spec  # noqa: E402 (needs distributed)
 
 SHAPE = (16, 18, 20)
@@ -51,6 +52,16 @@ def test_distributed_run_is_the_one_process_run(device, client, labels, likeliho
     assert dask.name == device.name  # the workers open the host's device
     used = client.run(lambda: list(__import__("clsolid.ml.distributed").ml.distributed._ENGINES))
     assert all(dask.runner.token in tokens for tokens in used.values())  # both workers ran tiles of the last scale
+
+
+def test_the_workers_draw_the_random_start_a_run_at_a_time(device, client, monkeypatch):
+    """In runs of 1000 voxels (16 of them, a few in flight), into a given array: the one-process start."""
+    monkeypatch.setattr(distributed_module, "_INIT_RUN", 1000)
+    pixels = np.arange(7, dtype=np.float32)
+    out = np.full(SHAPE, -1, np.float32)
+    drawn = DaskTiles(client, device).init_volume(SHAPE, 3, pixels, out)
+    assert drawn is out
+    np.testing.assert_array_equal(out, CLBackend(device).init_volume(SHAPE, 3, pixels))
 
 
 def test_synthesize_with_a_client(device, client):

@@ -32,6 +32,9 @@ from .model import ScaleModel
 from .params import MLParams
 from .tiled import TileJob, TileResult, check_tile, run_tile
 
+#: Voxels of the random start one task draws (16 MB of float32).
+_INIT_RUN = 1 << 22
+
 INSTALL = 'pip install "clsolid[dask]"'
 
 
@@ -114,10 +117,12 @@ def check_task(spec: str | None, options: dict, models: list[ScaleModel], edge: 
         check_tile(_engine(spec, options), models, edge, params)
 
 
-def init_task(spec: str | None, options: dict, shape, seed: int, pixels: np.ndarray) -> np.ndarray:
-    """A Dask task: the random start (:meth:`clsolid.ml.opencl.CLBackend.init_volume`)."""
+def init_task(spec: str | None, options: dict, shape, seed: int, pixels: np.ndarray, first: int,
+              count: int) -> np.ndarray:
+    """A Dask task: *count* voxels from flat index *first* of the random start
+    (:meth:`clsolid.ml.opencl.CLBackend.init_part`)."""
     with _LOCK:
-        return _engine(spec, options).init_volume(shape, seed, pixels)
+        return _engine(spec, options).init_part(shape, seed, pixels, first, np.empty(count, np.float32))
 
 
 # -- on the host ----------------------------------------------------------------------------
@@ -170,11 +175,21 @@ class DaskTiles:
         self._on_each(check_task, self.spec, self.options, models, edge, params)
 
     def init_volume(self, shape, seed: int, pixels: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-        """The random start, drawn by a worker (copied into *out* if given)."""
-        vol = self.client.submit(init_task, self.spec, self.options, tuple(shape), seed, pixels, pure=False).result()
-        if out is None:
-            return vol
-        out[...] = vol
+        """The random start, drawn by the workers a run of voxels each (a few runs in flight, so
+        neither side holds the whole block), into *out* (such as a scratch file's) if given."""
+        from distributed import wait
+
+        out = np.empty(shape, np.float32) if out is None else out
+        flat = out.reshape(-1)
+        runs = [(first, min(_INIT_RUN, flat.size - first)) for first in range(0, flat.size, _INIT_RUN)]
+        window = 2 * max(1, len(self.client.scheduler_info()["workers"]))
+        for lo in range(0, len(runs), window):
+            batch = [(first, self.client.submit(init_task, self.spec, self.options, tuple(shape), seed, pixels,
+                                                first, count, pure=False)) for first, count in runs[lo: lo + window]]
+            wait([f for _, f in batch])
+            for first, future in batch:
+                part = future.result()
+                flat[first: first + part.size] = part
         return out
 
     def load_scale(self, model: ScaleModel, params: MLParams, block) -> None:

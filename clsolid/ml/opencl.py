@@ -170,24 +170,29 @@ class CLBackend:
         """Random exemplar pixels, drawn by Philox on (seed, x, y, z) in a kernel, in runs of
         voxels that fit one buffer (the volume may be larger than the device holds); into
         *out* (float32 of *shape*, such as a scratch file's) if given."""
-        import pyopencl as cl
-
         n = int(np.prod(shape))
-        k = programs.build(self.device, "core/init.cl")
         out = np.empty(shape, np.float32) if out is None else out
         flat = out.reshape(n)  # a view: written through, memory-mapped or not
         run = max(1, min(n, self.device.max_alloc // _F4, _INIT_RUN))
-        buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, run * _F4)
+        for first in range(0, n, run):
+            self.init_part(shape, seed, pixels, first, flat[first: first + run])
+        return out  # float32, as on the device: start_state widens one scale at a time
+
+    def init_part(self, shape, seed: int, pixels: np.ndarray, first: int, part: np.ndarray) -> np.ndarray:
+        """Voxels ``first, first + 1, ...`` (flat) of :meth:`init_volume`'s random start, into
+        the float32 array *part* (as many as it holds, at most a buffer's worth), returned."""
+        import pyopencl as cl
+
+        k = programs.build(self.device, "core/init.cl")
+        buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, part.size * _F4)
         key = seed_key(seed)
         px = self._buf(pixels.astype(np.float32).ravel())
-        for first in range(0, n, run):
-            part = flat[first: first + run]
-            k["init_random"](self.device.queue, (self._global(part.size),), (self.local,), buf,
-                             np.int32(shape[0]), np.int32(shape[1]), np.int32(shape[2]), np.int64(first),
-                             np.int32(part.size), np.uint32(key[0]), np.uint32(key[1]), np.uint32(TAG_INIT), px,
-                             np.uint32(pixels.size))
-            cl.enqueue_copy(self.device.queue, part, buf)
-        return out  # float32, as on the device: start_state widens one scale at a time
+        k["init_random"](self.device.queue, (self._global(part.size),), (self.local,), buf,
+                         np.int32(shape[0]), np.int32(shape[1]), np.int32(shape[2]), np.int64(first),
+                         np.int32(part.size), np.uint32(key[0]), np.uint32(key[1]), np.uint32(TAG_INIT), px,
+                         np.uint32(pixels.size))
+        cl.enqueue_copy(self.device.queue, part, buf)
+        return part
 
     def start_scale(self, model: ScaleModel, vol: np.ndarray, temp: np.ndarray, params: MLParams,
                     sources: np.ndarray | None = None) -> None:
