@@ -36,7 +36,7 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
                "prune_similar", "prune_sample", "prune_min_weight", "prune_projected",
-               "prune_projected_k", "prune_projected_probe", "prune_projected_sweeps", "falloff")
+               "prune_projected_k", "prune_projected_probe", "prune_projected_sweeps", "falloff", "region")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client", "scratch")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
 _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
@@ -293,7 +293,12 @@ def synthesize(
         that disk, which is checked for room first. The result's arrays are then
         ``numpy.memmap`` files there too, nameless (they go when the arrays do), so a result
         larger than memory is returned, and :func:`clsolid.volumeio.save_volume` writes it a
-        plane at a time.
+        plane at a time. ``region`` (0, the default: each sweep visits the conflict-free sets
+        over the whole block) visits the block region by region instead, cubes of at most
+        that many voxels a side, every set of one region before the next: another visiting
+        order (another volume, of the same statistics; README, Using it), whose sweep reads
+        each region's state once where a set-by-set sweep reads the whole state once a set,
+        for a scratch folder larger than the page cache (``region`` = ``tile``).
 
         Relaxation (thesis_spec §2.3): ``relaxation`` is ``"gibbs"`` (default: each visited
         voxel draws its label from the combined, normalised LCPDF; per-voxel temperatures,

@@ -192,6 +192,10 @@ def _add_synth(sub) -> None:
                    help="Gaussian weight of each neighbourhood term by its distance from the centre, this "
                         "sigma in pixels of each scale (default: 3 for grey exemplars, 0 for categorical "
                         "ones); 0 = every term alike, the thesis")
+    p.add_argument("--region", type=int, default=d.region, metavar="N",
+                   help="ml: visit the block region by region, cubes of at most N voxels, every set of one before "
+                        "the next (another visiting order, the same statistics): with --scratch and --tile N, each "
+                        "region's state is read from the disk once a sweep (default 0: set by set, whole block)")
     p.add_argument("--checkpoint", type=Path, default=None,
                    help="ml: save the run's state in this folder after every sweep (see --checkpoint-every), "
                         "so that --resume can go on after a crash or Ctrl-C")
@@ -332,8 +336,8 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
             "prune_similar", "prune_sample", "prune_min_weight", "prune_projected", "prune_projected_k",
-            "prune_projected_probe", "prune_projected_sweeps", "falloff", "tile", "scratch", "scheduler", "workers",
-            "indices", "track")
+            "prune_projected_probe", "prune_projected_sweeps", "falloff", "region", "tile", "scratch", "scheduler",
+            "workers", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "parent_weight", "init", "rule", "order", "causal", "histogram",
             "candidates", "specify", "search", "exact_passes", "site_map", "source_map")
 
@@ -404,7 +408,7 @@ def _ml_options(args) -> dict:
                    prune_min_weight=args.prune_min_weight, prune_projected=args.prune_projected,
                    prune_projected_k=args.prune_projected_k, prune_projected_probe=args.prune_projected_probe,
                    prune_projected_sweeps=args.prune_projected_sweeps,
-                   falloff=args.falloff)
+                   falloff=args.falloff, region=args.region)
     if args.tile is not None:
         options["tile"] = args.tile
     if args.scratch is not None:

@@ -36,6 +36,7 @@ def test_both_tag_sets_are_aliases(name, canonical):
     (dict(bandwidth=2.0, bandwidth_factor=1.0), "not both"), (dict(bandwidth_factor=(1.0, 0.5)), "bandwidth_factor"),
     (dict(bandwidth_factor=True), "bandwidth_factor"), (dict(bandwidth_factor="0.2"), "bandwidth_factor"),
     (dict(initial_temperature=0), "initial_temperature"),
+    (dict(region=-1), "region"), (dict(region=2.5), "region"),
 ])
 def test_bad_parameters_name_themselves(kwargs, word):
     with pytest.raises(InputError, match=word):

@@ -105,6 +105,8 @@ def test_same_seed_same_file(tmp_path, device):
     (["--seam-gap", "0"], "seam_gap", 0),
     ([], "falloff", 3.0),  # brick is grey: auto weighs the terms by a Gaussian of sigma 3
     (["--falloff", "0"], "falloff", 0.0),
+    ([], "region", 0),  # set by set over the whole block
+    (["--region", "6"], "region", 6),
 ])
 def test_method_options_reach_the_sidecar(tmp_path, device, argv, key, expected):
     assert main(["synth", "-o", str(tmp_path / "v.npy"), *FAST, "-q", *argv]) == 0

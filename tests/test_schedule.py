@@ -4,7 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from clsolid.ml.model import view_offsets
-from clsolid.core.schedule import colour_set, colour_sets, period, set_count, set_order
+from clsolid.core.schedule import colour_set, colour_sets, period, regions, set_count, set_order
 
 
 def union_offsets(half, views):
@@ -66,3 +66,21 @@ def test_colour_sets_partition_active_voxels(shape, half):
         assert (np.diff(s) > 0).all()  # ascending within a set
         # each set generated from the formula equals a scan of the colour array
         np.testing.assert_array_equal(colour_set(shape, n, c), np.flatnonzero(colour.ravel() == c))
+
+
+@pytest.mark.parametrize("shape, half, edge", [((6, 7, 8), 2, 3), ((13, 5, 8), 1, 4), ((9, 9, 9), 3, 9),
+                                               ((5, 6, 7), 1, 0)])
+def test_regions_split_every_set(shape, half, edge):
+    """A region-by-region sweep visits each set's voxels once: the sets cut by the regions'
+    boxes (cubes of at most *edge*, 0: the whole block) are the sets, voxel for voxel."""
+    n = set_count(shape, half)
+    boxes = regions(shape, edge)
+    sizes = [np.prod([b - a for a, b in box]) for box in boxes]
+    assert sum(sizes) == np.prod(shape) and all(b - a <= (edge or max(shape)) for box in boxes for a, b in box)
+    active = np.random.default_rng(1).random(shape) < 0.7
+    for c in range(n):
+        parts = [colour_set(shape, n, c, active, box) for box in boxes]
+        np.testing.assert_array_equal(np.sort(np.concatenate(parts)), colour_set(shape, n, c, active))
+        for box, part in zip(boxes, parts):
+            coords = np.unravel_index(part, shape)
+            assert all(((a <= q) & (q < b)).all() for q, (a, b) in zip(coords, box))

@@ -205,6 +205,33 @@ def test_tiled_checkpoint_resumes_identically(tmp_path, device, monkeypatch):
     assert list((tmp_path / "scratch").iterdir()) == []
 
 
+def test_region_order_is_a_visiting_order_the_tiles_keep(device, tmp_path, monkeypatch):
+    """region=N visits each region's sets before the next region's: another sequential order, so
+    another volume than the set-by-set sweep, but the same one in tiles (of any edge), on disk,
+    and resumed from a checkpoint. With tiles of the regions' edge a tile's state stays on the
+    device from one set to the next: it is sent once a region and sweep, not once a set."""
+    kw = dict(neighborhood=5, scales=2, rng=4, builtin_size=16, sweeps=2, device=device, region=6)
+    one = clsolid.synthesize("gravel", (12, 10, 14), **kw)
+    assert not np.array_equal(one, clsolid.synthesize("gravel", (12, 10, 14), **{**kw, "region": 0}))
+    loads, real = [], CLBackend.load_state
+    monkeypatch.setattr(CLBackend, "load_state", lambda self, *a, **k: loads.append(1) or real(self, *a, **k))
+    np.testing.assert_array_equal(clsolid.synthesize("gravel", (12, 10, 14), tile=6, **kw), one)
+    held, loads[:] = len(loads), []
+    np.testing.assert_array_equal(clsolid.synthesize("gravel", (12, 10, 14), tile=5, scratch=tmp_path, **kw), one)
+    assert held * 4 < len(loads)  # tiles of 5 cut the regions of 6: sent again for every set
+
+    class Stop(Exception):
+        pass
+
+    def stop(info):
+        if info.scale == 2 and info.sweep == 1:
+            raise Stop
+
+    with pytest.raises(Stop):
+        clsolid.synthesize("gravel", (12, 10, 14), tile=6, checkpoint=tmp_path / "run", progress=stop, **kw)
+    np.testing.assert_array_equal(clsolid.resume(tmp_path / "run", device=device), one)
+
+
 # -- the state on disk (scratch) -----------------------------------------------------------------
 
 

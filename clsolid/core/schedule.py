@@ -52,9 +52,11 @@ def set_order(n_sets: int, seed: int, scale: int, sweep: int) -> np.ndarray:
     return np.random.default_rng([seed, scale, sweep]).permutation(n_sets)
 
 
-def colour_set(shape: tuple[int, int, int], n_sets: int, c: int, active: np.ndarray | None = None) -> np.ndarray:
+def colour_set(shape: tuple[int, int, int], n_sets: int, c: int, active: np.ndarray | None = None,
+               box: tuple[tuple[int, int], ...] | None = None) -> np.ndarray:
     """Flat indices, ascending, of the voxels of colour *c* (of :func:`colour_sets`' *n_sets*),
-    only the *active* ones if a mask is given.
+    only the *active* ones if a mask is given, only those in *box* (``(start, stop)`` per
+    axis, a region of :func:`regions`) if one is.
 
     Generated from the colour's formula, plane by plane, so that a sweep never holds more
     than one set's indices: for c = (cy, cx), plane z holds the grid y = cy - z,
@@ -62,7 +64,25 @@ def colour_set(shape: tuple[int, int, int], n_sets: int, c: int, active: np.ndar
     k = math.isqrt(n_sets)
     cy, cx = divmod(int(c), k)
     depth, rows, cols = shape
-    planes = [((z * rows + np.arange((cy - z) % k, rows, k)[:, None]) * cols
-               + np.arange((cx - z) % k, cols, k)[None, :]).ravel() for z in range(depth)]
+    (z0, z1), (y0, y1), (x0, x1) = box or ((0, depth), (0, rows), (0, cols))
+
+    def first(lo: int, residue: int) -> int:  # the first index >= lo of that residue mod k
+        return lo + (residue - lo) % k
+
+    planes = [((z * rows + np.arange(first(y0, cy - z), y1, k)[:, None]) * cols
+               + np.arange(first(x0, cx - z), x1, k)[None, :]).ravel() for z in range(z0, z1)]
     idx = np.concatenate(planes) if planes else np.empty(0, np.intp)
     return idx if active is None else idx[np.ravel(active)[idx]]
+
+
+def regions(shape: tuple[int, int, int], edge: int) -> list[tuple[tuple[int, int], ...]]:
+    """The boxes (``(start, stop)`` per axis) of a region-by-region sweep: the block cut, axis
+    by axis, into cubes of at most *edge* (as :func:`clsolid.core.tiles.split_axis` cuts it
+    into tiles, so that regions of a tile's edge are its cores), in raster order; 0: the
+    whole block."""
+    from .tiles import split_axis
+
+    if not edge:
+        return [tuple((0, n) for n in shape)]
+    axes = [[(s, s + n) for s, n in split_axis(size, edge)] for size in shape]
+    return [(a, b, c) for a in axes[0] for b in axes[1] for c in axes[2]]

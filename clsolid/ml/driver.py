@@ -16,7 +16,7 @@ from ..exemplar import nearest_level_index
 from .model import ScaleModel, build_scale, check_exemplar_fits
 from .params import MLParams
 from ..core.philox import relax_tag
-from ..core.schedule import set_order
+from ..core.schedule import regions, set_order
 from ..core.scratch import Scratch
 from ..core.slices import insert_slices
 from ..core.threads import serial_blas
@@ -331,8 +331,8 @@ def run_ml(
             order = set_order(model.n_sets, seed, model.level, sweep)
             if balance is not None:
                 balance.start_sweep(active)
-            for c in order:
-                voxels = model.set_voxels(c, active)  # one set's indices at a time (host memory)
+            for box, c in ((box, c) for box in regions(model.shape, params.region) for c in order):
+                voxels = model.set_voxels(c, active, box)  # one set's indices at a time (host memory)
                 if not voxels.size:
                     continue
                 backend.update(voxels)

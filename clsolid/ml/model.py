@@ -212,9 +212,10 @@ class ScaleModel:
         """The set of each voxel, ``(Z, Y, X)`` (made on request: the drivers use :meth:`set_voxels`)."""
         return colour_sets(self.shape, self.half)[0]
 
-    def set_voxels(self, c: int, active: np.ndarray | None = None) -> np.ndarray:
-        """Flat indices, ascending, of the (*active*) voxels of colour set *c*."""
-        return colour_set(self.shape, self.n_sets, c, active)
+    def set_voxels(self, c: int, active: np.ndarray | None = None, box=None) -> np.ndarray:
+        """Flat indices, ascending, of the (*active*) voxels of colour set *c* (in *box*, a
+        region of :func:`clsolid.core.schedule.regions`, if given)."""
+        return colour_set(self.shape, self.n_sets, c, active, box)
 
 
 def check_exemplar_fits(exemplar_shape: tuple[int, int], params: MLParams) -> None:

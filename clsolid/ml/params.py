@@ -175,6 +175,9 @@ class MLParams:
     prune_projected_probe: int = 8  # site lists it reads (0: every site; clsolid.ml.pruned.site_lists)
     # the first sweeps of each scale that search them (0: every sweep; README, Performance)
     prune_projected_sweeps: int = 1
+    # 0: each sweep visits the sets over the whole block; N: region by region, cubes of N voxels,
+    # every set of one before the next (a tiled run's disk and transfers; README, Using it)
+    region: int = 0
 
     def __post_init__(self):
         k = int_in("neighborhood", self.neighborhood, 3, 31)
@@ -205,6 +208,7 @@ class MLParams:
                              "has the same pieces")
         if self.seam_gap is not None:
             int_in("seam_gap", self.seam_gap, 0)
+        int_in("region", self.region, 0)
         t0 = self.initial_temperature
         if not (isinstance(t0, numbers.Real) and 0 < t0 <= 1):
             raise InputError(f"initial_temperature={t0!r} must be in (0, 1] (1 = no confidence, the thesis)")

@@ -100,9 +100,9 @@ class TileJob:
     by :func:`clsolid.core.tiles.gather`), where it lies, the voxels (the tile's flat
     indices) and the balance's score rows of those voxels that have one."""
 
-    volume: np.ndarray
-    temperature: np.ndarray
-    sources: np.ndarray
+    volume: np.ndarray | None  # None: the engine holds the tile's current state already (resident)
+    temperature: np.ndarray | None
+    sources: np.ndarray | None
     origin: tuple[int, int, int]
     voxels: np.ndarray
     score_rows: np.ndarray
@@ -124,7 +124,8 @@ def run_tile(engine: Any, job: TileJob) -> TileResult:
     """Relax a tile's voxels of a set on *engine* (a :class:`~clsolid.ml.opencl.CLBackend`
     holding the scale's tables and the sweep's arguments)."""
     before = engine.exact_visits, engine.pruned_visits
-    engine.load_state(job.volume, job.temperature, job.sources, job.origin)
+    if job.volume is not None:
+        engine.load_state(job.volume, job.temperature, job.sources, job.origin)
     engine.update(job.voxels)
     values, temperatures, sources = engine.read_voxels(job.voxels)
     return TileResult(values, temperatures, sources, engine.read_scores(job.score_rows),
@@ -137,6 +138,9 @@ class LocalTiles:
     A runner of :class:`TiledBackend` (see :class:`clsolid.ml.distributed.DaskTiles` for the
     other): ``prepare``, ``init_volume``, ``load_scale``, ``start_sweep`` and ``map``.
     """
+
+    #: One engine runs every tile, so the state of the last tile it ran stays on its device.
+    keeps_state = True
 
     def __init__(self, engine: Any) -> None:
         self.engine, self.name = engine, engine.name
@@ -181,6 +185,7 @@ class TiledBackend:
         self.runner = runner if hasattr(runner, "map") else LocalTiles(runner)
         self.name = self.runner.name
         self.exact_visits = self.pruned_visits = 0  # voxel visits by sum, in the pruned mode
+        self._held = None
 
     def prepare(self, models: list[ScaleModel], params: MLParams | None = None) -> None:
         """Refuse, before allocating anything, tiles whose buffers (for a run of *params*)
@@ -199,6 +204,7 @@ class TiledBackend:
             self.scratch.free(old)  # the last scale's state (its volume is the start's, made already)
         self.tiling = scale_tiling(model, self.tile)
         self.runner.load_scale(model, params, self.tiling.largest_block)
+        self._held = None  # the start of the tile whose current state the runner's engine holds
         views = model.offsets.shape[0]
         # the driver's own start, not copied (host memory): float32 on this back end's scratch
         self._vol = vol if vol.dtype == np.float32 else self.scratch.copy(vol, np.float32)
@@ -213,10 +219,16 @@ class TiledBackend:
         self.runner.start_sweep(seed, tag, t_in, bias)
 
     def update(self, voxels: np.ndarray) -> None:
-        """Relax one conflict-free set of voxels (flat indices), tile by tile."""
+        """Relax one conflict-free set of voxels (flat indices), tile by tile. A tile whose
+        state the runner's one engine still holds, no other tile having run since (the next
+        set of a region-by-region sweep, ``region`` = ``tile``), is not gathered and sent again."""
         groups = [(tile, part, score_rows(part, self.stride)) for tile, part in self.tiling.group(voxels)]
-        jobs = (TileJob(gather(self._vol, tile), gather(self._temp, tile), gather(self._src, tile), tile.origin,
-                        tile.local(part), rows) for tile, part, rows in groups)
+        held = self._held
+        jobs = (TileJob(None, None, None, tile.origin, tile.local(part), rows) if i == 0 and tile.start == held
+                else TileJob(gather(self._vol, tile), gather(self._temp, tile), gather(self._src, tile), tile.origin,
+                             tile.local(part), rows) for i, (tile, part, rows) in enumerate(groups))
+        if groups and getattr(self.runner, "keeps_state", False):
+            self._held = groups[-1][0].start
         src = self.sources()
         for (tile, part, rows), r in zip(groups, self.runner.map(jobs)):
             self._vol.flat[part], self._temp.flat[part], src[:, part] = r.values, r.temperatures, r.sources
