@@ -139,7 +139,8 @@ def test_bench_scale_compares_the_workers_run(capsys, device, client, tool):
     import argparse
 
     args = argparse.Namespace(cases=["64:8"], names=["porous50"], likelihoods=["pruned"], budget=900.0,
-                              device=device_spec(device), tile=5, workers=2, tiled_only=False, verbose=False)
+                              device=device_spec(device), tile=5, workers=2, tiled_only=False, verbose=False,
+                              scratch=None, region=0)
     tool("bench_scale").table(args, client)
     out = capsys.readouterr().out
     assert "the tiles on 2 Dask workers" in out and "| porous50 | 64² → 8³ | pruned |" in out

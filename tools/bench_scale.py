@@ -43,10 +43,10 @@ class _Stop(Exception):
 
 
 def run(image: np.ndarray, side: int, likelihood: str, budget: float, device, tile: int | None = None,
-        client=None, verbose: bool = False, scratch=None) -> dict:
+        client=None, verbose: bool = False, scratch=None, region: int = 0) -> dict:
     """Grow a *side*^3 cube (in tiles of *tile*, if given, on the workers of a Dask *client*, if
-    given, their state in files in the folder *scratch*, if given); return the volume (None if
-    stopped), the time, sweeps and finest-scale cost per voxel visit."""
+    given, their state in files in the folder *scratch*, if given, region by region if *region*);
+    return the volume (None if stopped), the time, sweeps and finest-scale cost per voxel visit."""
     sweeps: list = []
     t0 = time.perf_counter()
 
@@ -61,8 +61,8 @@ def run(image: np.ndarray, side: int, likelihood: str, budget: float, device, ti
             raise _Stop
 
     stopped, volume = False, None
-    options = {k: v for k, v in (("tile", tile), ("client", client), ("scratch", scratch if tile else None))
-               if v is not None}
+    options = {k: v for k, v in (("tile", tile), ("client", client), ("scratch", scratch if tile else None),
+                                 ("region", region or None)) if v is not None}
     try:
         volume = clsolid.synthesize(image, (side,) * 3, rng=1, device=device, likelihood=likelihood,
                                     progress=progress, **options)
@@ -90,6 +90,9 @@ def main(argv: list[str] | None = None) -> None:
                     help="with --tile: run each case in tiles only, not also in one piece")
     ap.add_argument("--scratch", default=None, metavar="DIR",
                     help="with --tile: every tiled run keeps its state in files in DIR (scratch=)")
+    ap.add_argument("--region", type=int, default=0, metavar="N",
+                    help="every run visits the block region by region, cubes of N voxels (region=; default 0: "
+                         "set by set)")
     ap.add_argument("--workers", type=int, default=None, metavar="N",
                     help="with --tile: also run every case's tiles on a Dask LocalCluster of N worker processes")
     args = ap.parse_args(argv)
@@ -133,14 +136,16 @@ def table(args, client) -> None:
             for likelihood in args.likelihoods:
                 first = args.tile if args.tiled_only else None  # the run the row's first columns describe
                 case_name = f"{ex_side}² → {cube}³" + (f", tiles of {args.tile}" if args.tiled_only else "")
-                r = run(image, cube, likelihood, args.budget, device, first, verbose=args.verbose, scratch=args.scratch)
+                r = run(image, cube, likelihood, args.budget, device, first, verbose=args.verbose, scratch=args.scratch,
+                        region=args.region)
                 row = (f"| {name} | {case_name} | {likelihood} | {seconds(r)} | "
                        f"{r['sweeps']} ({r['finest_sweeps']}) | {r['per_visit_us']:.1f} |")
                 if args.tile is not None and not args.tiled_only:
-                    t = run(image, cube, likelihood, args.budget, device, args.tile, scratch=args.scratch)
+                    t = run(image, cube, likelihood, args.budget, device, args.tile, scratch=args.scratch, region=args.region)
                     row += f" {seconds(t)} | {same(r, t)} |"
                     if client is not None:
-                        w = run(image, cube, likelihood, args.budget, device, args.tile, client, scratch=args.scratch)
+                        w = run(image, cube, likelihood, args.budget, device, args.tile, client, scratch=args.scratch,
+                                region=args.region)
                         row += f" {seconds(w)} | {same(t, w)} |"
                 print(row, flush=True)
 
