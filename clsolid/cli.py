@@ -194,7 +194,7 @@ def _add_synth(sub) -> None:
                         "ones); 0 = every term alike, the thesis")
     p.add_argument("--region", type=int, default=d.region, metavar="N",
                    help="ml: visit the block region by region, cubes of at most N voxels, every set of one before "
-                        "the next (another visiting order, the same statistics): with --scratch and --tile N, each "
+                        "the next (another visiting order; README, Using it): with --scratch and --tile N, each "
                         "region's state is read from the disk once a sweep (default 0: set by set, whole block)")
     p.add_argument("--checkpoint", type=Path, default=None,
                    help="ml: save the run's state in this folder after every sweep (see --checkpoint-every), "

@@ -176,7 +176,7 @@ class MLParams:
     # the first sweeps of each scale that search them (0: every sweep; README, Performance)
     prune_projected_sweeps: int = 1
     # 0: each sweep visits the sets over the whole block; N: region by region, cubes of N voxels,
-    # every set of one before the next (a tiled run's disk and transfers; README, Using it)
+    # every set of one before the next (a tiled run's disk and transfers; tissue scores worse: README, Using it)
     region: int = 0
 
     def __post_init__(self):
