@@ -296,8 +296,8 @@ def synthesize(
         plane at a time. ``region`` (0, the default: each sweep visits the conflict-free sets
         over the whole block) visits the block region by region instead, cubes of at most
         that many voxels a side, every set of one region before the next: another visiting
-        order (another volume: alike on the categorical gallery, worse on tissue, whose
-        balance a region at a time pulls off; README, Using it), whose sweep reads
+        order (another volume: alike on the categorical gallery, worse on tissue, through
+        the balance; README, Using it), whose sweep reads
         each region's state once where a set-by-set sweep reads the whole state once a set,
         for a scratch folder larger than the page cache (``region`` = ``tile``).
 
