@@ -144,41 +144,43 @@ def _tiff_info(tif: tifffile.TiffFile) -> tuple[dict, dict]:
 _RESOLUTION_CM = 3
 
 
-def _ome_pixel_size(xml: str | None) -> tuple[tuple[float, float], str] | None:
-    """``((y, x), unit)`` from an OME-XML header's first ``Pixels`` element, or None."""
+def _ome_elements(xml: str | None, tag: str) -> Iterator[Any]:
+    """The elements named *tag* (any namespace) of an OME-XML header, in document order;
+    none where it does not parse."""
     import xml.etree.ElementTree as ElementTree
 
     try:
         root = ElementTree.fromstring(xml or "")
     except ElementTree.ParseError:
+        return iter(())
+    return (el for el in root.iter() if el.tag.rsplit("}", 1)[-1] == tag)
+
+
+def _pixels_size(el: Any) -> tuple[tuple[float, float], str] | None:
+    """``((y, x), unit)`` from an OME ``Pixels`` element, or None."""
+    unit = el.get("PhysicalSizeXUnit", "\u00b5m")  # OME's default unit
+    if el.get("PhysicalSizeX") is None or el.get("PhysicalSizeYUnit", unit) != unit:
         return None
-    for el in root.iter():
-        if el.tag.rsplit("}", 1)[-1] != "Pixels":
-            continue
-        unit = el.get("PhysicalSizeXUnit", "\u00b5m")  # OME's default unit
-        if el.get("PhysicalSizeX") is None or el.get("PhysicalSizeYUnit", unit) != unit:
-            return None
-        try:
-            x = float(el.get("PhysicalSizeX"))
-            y = float(el.get("PhysicalSizeY", x))
-        except ValueError:
-            return None
-        return ((y, x), unit) if min(x, y) > 0 and math.isfinite(x + y) else None
-    return None
+    try:
+        x = float(el.get("PhysicalSizeX"))
+        y = float(el.get("PhysicalSizeY", x))
+    except ValueError:
+        return None
+    return ((y, x), unit) if min(x, y) > 0 and math.isfinite(x + y) else None
+
+
+def _ome_pixel_size(xml: str | None) -> tuple[tuple[float, float], str] | None:
+    """``((y, x), unit)`` from an OME-XML header's first ``Pixels`` element, or None."""
+    pixels = next(_ome_elements(xml, "Pixels"), None)
+    return None if pixels is None else _pixels_size(pixels)
 
 
 def _ome_info(xml: str | None) -> dict[str, Any]:
     """Voxel size, unit and our metadata from the OME-XML of a stack :func:`save_volume`
     wrote (or any OME-TIFF: a missing PhysicalSizeZ is 1, as ImageJ's default depth), and
     ``ome_stack``: whether :func:`save_volume` wrote it (a one-plane stack stays 3D)."""
-    import xml.etree.ElementTree as ElementTree
-
     info: dict[str, Any] = {}
-    try:
-        root = ElementTree.fromstring(xml or "")
-    except ElementTree.ParseError:
-        return info
-    image = next((el for el in root.iter() if el.tag.rsplit("}", 1)[-1] == "Image"), None)
+    image = next(_ome_elements(xml, "Image"), None)
     if image is None:
         return info
     for el in image:
@@ -190,7 +192,7 @@ def _ome_info(xml: str | None) -> dict[str, Any]:
                 pass
         elif name == "Pixels":
             info["ome_stack"] = image.get("Name") == _OME_NAME
-            found = _ome_pixel_size(xml)
+            found = _pixels_size(el)
             if found is not None:
                 (y, x), unit = found
                 z = float(el.get("PhysicalSizeZ", 1.0)) if el.get("PhysicalSizeZUnit", unit) == unit else 1.0
@@ -249,15 +251,15 @@ def _read_tiff(path: pathlib.Path, param: str) -> tuple[np.ndarray, dict]:
             info, props = _tiff_info(tif)
             if tif.is_ome and not tif.is_imagej:
                 info.update(_ome_info(tif.ome_metadata))
+            ome_stack = info.pop("ome_stack", False)
     except (OSError, ValueError, tifffile.TiffFileError) as exc:
         raise InputError(
             f"{param} {str(path)!r} could not be read as a TIFF file ({exc}); "
             "check that the file is a valid TIFF"
         ) from exc
     # tifffile squeezes a one-slice stack to 2D; our marker (an OME stack's axes) says it was a volume.
-    if data.ndim == 2 and (props.get(_PROP_AXES) == "ZYX" or info.pop("ome_stack", False)):
+    if data.ndim == 2 and (props.get(_PROP_AXES) == "ZYX" or ome_stack):
         data = data[np.newaxis]
-    info.pop("ome_stack", None)
     return data, info
 
 
@@ -322,14 +324,18 @@ def _check_unit(unit: Any) -> str:
     return "".join(c if ord(c) < 128 else f"\\u{ord(c):04X}" for c in unit)
 
 
+def _written_unit(unit: Any, path: pathlib.Path | None, spacing: Any) -> str:
+    """*unit* as the file at *path* records it: OME's symbol in an ``.ome.tif`` with a voxel
+    size (:func:`_ome_unit`), else as the ImageJ header writes it (:func:`_check_unit`)."""
+    written = _check_unit(unit)
+    return _ome_unit(unit) if spacing is not None and path is not None and _is_ome(path) else written
+
+
 def check_calibration(voxel_size: Any, unit: Any, path: PathLike | None = None) -> None:
     """Raise :class:`~clsolid.errors.InputError` for a *voxel_size* or *unit* that
     :func:`save_volume` would refuse (writing *path*, if given), so that a run can fail
     before it starts, not after."""
-    _check_voxel_size(voxel_size)
-    _check_unit(unit)
-    if voxel_size is not None and path is not None and _is_ome(pathlib.Path(path)):
-        _ome_unit(unit)
+    _written_unit(unit, None if path is None else pathlib.Path(path), _check_voxel_size(voxel_size))
 
 
 def _check_metadata(metadata: Any) -> str | None:
@@ -482,19 +488,15 @@ def save_volume(
     suffix = _suffix(p, "path", VOLUME_WRITE_SUFFIXES)
     vol = _check_volume(volume)
     spacing = _check_voxel_size(voxel_size)
-    _check_unit(unit)
+    unit = _written_unit(unit, p, spacing)
     meta_json = _check_metadata(metadata)
     p.parent.mkdir(parents=True, exist_ok=True)
     if suffix == ".npy":
         narrowed = vol.dtype if vol.dtype.kind == "f" else _narrow_dtype(vol)
         _write_npy(p, vol, vol.dtype if narrowed is None else narrowed)
         return p
-    if _is_ome(p):
-        if spacing is not None:
-            _ome_unit(unit)  # before anything is written
-        _write_ome(p, vol, _tiff_dtype(vol), spacing, unit, meta_json)
-    else:
-        _write_imagej(p, vol, _tiff_dtype(vol), spacing, _check_unit(unit), meta_json)
+    write = _write_ome if _is_ome(p) else _write_imagej
+    write(p, vol, _tiff_dtype(vol), spacing, unit, meta_json)
     return p
 
 
@@ -517,10 +519,9 @@ def _write_ome(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spacing:
     its samples pass 4 GiB, which every OME reader (Fiji's Bio-Formats, napari, tifffile)
     reads whole. The calibration is OME's PhysicalSize; the metadata its image's Description."""
     meta: dict[str, Any] = {"axes": "ZYX", "Name": _OME_NAME}
-    if spacing is not None:
-        symbol = _ome_unit(unit)
+    if spacing is not None:  # unit: OME's symbol (_written_unit)
         for axis, size in zip("ZYX", spacing):
-            meta.update({f"PhysicalSize{axis}": size, f"PhysicalSize{axis}Unit": symbol})
+            meta.update({f"PhysicalSize{axis}": size, f"PhysicalSize{axis}Unit": unit})
     if meta_json is not None:
         meta["Description"] = meta_json
     big = volume.size * dtype.itemsize > _CLASSIC_TIFF_BYTES
@@ -551,9 +552,8 @@ def _write_imagej(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spaci
             warnings.warn(LargeTiffWarning(
                 f"{path}: {volume.size * dtype.itemsize / 2**30:.1f} GiB of samples, above the 4 GiB of a classic "
                 "TIFF, written in ImageJ's large-file form (one directory, the planes stored contiguously): "
-                "ImageJ/Fiji, "
-                "tifffile and clsolid read it whole, other TIFF readers only its first plane; save as .npy for "
-                "those, or .ome.tif (an OME BigTIFF, which they read whole)"), stacklevel=3)
+                "ImageJ/Fiji, tifffile and clsolid read it whole, other TIFF readers only its first plane; save "
+                "as .npy for those, or .ome.tif (an OME BigTIFF, which they read whole)"), stacklevel=3)
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 

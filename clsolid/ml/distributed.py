@@ -177,8 +177,6 @@ class DaskTiles:
     def init_volume(self, shape, seed: int, pixels: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """The random start, drawn by the workers a run of voxels each (a few runs in flight, so
         neither side holds the whole block), into *out* (such as a scratch file's) if given."""
-        from distributed import wait
-
         out = np.empty(shape, np.float32) if out is None else out
         flat = out.reshape(-1)
         runs = [(first, min(_INIT_RUN, flat.size - first)) for first in range(0, flat.size, _INIT_RUN)]
@@ -186,8 +184,7 @@ class DaskTiles:
         for lo in range(0, len(runs), window):
             batch = [(first, self.client.submit(init_task, self.spec, self.options, tuple(shape), seed, pixels,
                                                 first, count, pure=False)) for first, count in runs[lo: lo + window]]
-            wait([f for _, f in batch])
-            for first, future in batch:
+            for first, future in batch:  # the batch's tasks run at once; each result is waited for in turn
                 part = future.result()
                 flat[first: first + part.size] = part
         return out
