@@ -1,11 +1,13 @@
 """The ETA's forecast (clsolid.ml.forecast): a scale's sweeps and visits replayed from the
 temperatures alone, against what the run then does."""
 
+import numpy as np
 import pytest
 
 import clsolid
 from clsolid.gallery import gallery_exemplar
 from clsolid.ml.forecast import forecast_visits
+from clsolid.ml.params import MLParams
 
 
 @pytest.mark.parametrize("options", [{}, {"relaxation": "icm"}, {"inherited": "fixed", "views": 3},
@@ -60,3 +62,29 @@ def test_a_scale_too_large_to_replay_is_forecast_on_a_smaller_block(device, monk
     assert all(abs(p - r) <= 0.1 * r for p, r in zip(proxied[0], run))
     assert (got.volume == want).all()
     assert etas[-1] == 0.0
+
+
+def _scale_stub(level: int, side: int):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(level=level, shape=(side,) * 3, n_sites=10_000, patches=np.zeros((120, 1)))
+
+
+@pytest.mark.parametrize("searching_sweeps, want", [(1, 10.0), (2, 5.0 + 30.0)])
+def test_eta_times_the_sweeps_to_come_without_the_projected_search(searching_sweeps, want):
+    """A sweep that searches projected candidates costs several that do not: after it, the ETA
+    counts the sweeps still to come at its rate less the search, and less what else such a
+    sweep costs more (learnt at the scale before: here its rest cost twice a plain sweep's)."""
+    from clsolid.ml.driver import _Clock
+
+    params = MLParams(likelihood="pruned", prune_projected=24, prune_projected_sweeps=searching_sweeps)
+    coarse, fine = _scale_stub(1, 8), _scale_stub(0, 16)
+    clock = _Clock([coarse, fine], params)
+    clock.plan(1, [100, 100, 100])
+    clock.eta(0, 1, 3.0, 100, coarse, 1.0, 2.0, 0.0, 2, searched=2.0)  # 1 s besides the search ...
+    clock.eta(0, searching_sweeps + 1, 0.5, 100, coarse, 1.0, 2.0, 0.0, 1)  # ... against 0.5 s without
+    clock.plan(1, [1000, 1000, 1000])
+    # 30 s, 20 of them searching: the next sweeps (1000 visits each) cost (30 - 20) / 2 = 5 s each
+    assert clock.eta(1, 1, 30.0, 1000, fine, 1.0, 2.0, 0.0, 2, searched=20.0) == pytest.approx(want)
+    # without a search, every sweep to come at this one's rate
+    assert clock.eta(1, 2, 6.0, 1000, fine, 1.0, 2.0, 0.0, 1) == pytest.approx(6.0)

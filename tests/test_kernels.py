@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from conftest import random_state
 
-from clsolid.ml.opencl import CLBackend, group_tables
+from clsolid.ml.opencl import CLBackend, group_tables, kernel_tables
 from clsolid.ml.model import build_scale
 from clsolid.ml.params import MLParams
 from clsolid.ml.reference import ReferenceBackend
@@ -53,6 +53,23 @@ def test_no_underflow_for_11x11_and_256_levels(device):
     got = cl_b.lcpdf(voxels)
     assert np.isfinite(got).all()
     np.testing.assert_allclose(got, want, rtol=2e-5, atol=1e-2)
+
+
+@pytest.mark.parametrize("distance", ["squared", "mismatch", "weighted"])
+def test_kernel_tables_hold_the_gaussian_factor_and_its_log(small_labels, distance):
+    """decide's tables: exp(L) then L, L = -difference / (2 h^2) for every (group, label), padded
+    with 1 and 0 so that a padding lane never takes the exact path."""
+    from clsolid.ml.model import difference
+
+    model = build_scale(small_labels, (6, 7, 8), MLParams(scales=1, distance=distance), 0)
+    values = model.labels[::-1].copy()
+    table = kernel_tables(model, values, 16)
+    n = model.labels.size
+    want = -difference(values[:, None], model.labels[None, :], model.mismatch, model.costs) / (2 * model.bandwidth**2)
+    assert table.shape == (2, values.size, 16) and table.dtype == np.float32
+    np.testing.assert_allclose(table[1, :, :n], want, rtol=1e-6)
+    np.testing.assert_allclose(table[0, :, :n], np.exp(want), rtol=1e-6, atol=1e-37)  # float32 underflows
+    assert (table[0, :, n:] == 1).all() and (table[1, :, n:] == 0).all()
 
 
 def test_falloff_weighs_each_term_by_its_gaussian(small_labels):

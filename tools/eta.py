@@ -9,6 +9,7 @@ finest scale's sweeps (positive: the ETA said more time than was left).
     python tools/eta.py                                  # brick, porous50, gravel at 64^3
     python tools/eta.py --names hrtem --shape 48 --set relaxation='"icm"'
     python tools/eta.py --replay-terms 0     # as on blocks too large to replay (512^3 and up)
+    python tools/eta.py --names gravel --size 128 --shape 128   # a grey exemplar whose first sweeps search
 """
 
 from __future__ import annotations
@@ -22,9 +23,10 @@ from clsolid.gallery import gallery_exemplar
 from clsolid.ml import forecast
 
 
-def measure(name: str, shape: int, seed: int, device, options: dict) -> dict:
-    """One run's (scale, sweep, elapsed, eta) reports and the ETA's relative errors on the finest scale."""
-    image = name if name in ("brick", "grass", "gravel") else gallery_exemplar(name, 64)
+def measure(name: str, shape: int, seed: int, device, options: dict, size: int | None = None) -> dict:
+    """One run's (scale, sweep, elapsed, eta) reports and the ETA's relative errors on the finest
+    scale; the gallery's exemplar at *size* if given (else brick, grass and gravel whole, the rest at 64)."""
+    image = name if size is None and name in ("brick", "grass", "gravel") else gallery_exemplar(name, size or 64)
     reports = []
     t0 = time.perf_counter()
     clsolid.synthesize(image, (shape,) * 3, rng=seed, device=device,
@@ -41,6 +43,8 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--names", nargs="+", default=["brick", "porous50", "gravel"])
     ap.add_argument("--shape", type=int, default=64, help="cube side (default 64)")
+    ap.add_argument("--size", type=int, default=None,
+                    help="the gallery's exemplars at this side (default: brick, grass, gravel whole, the rest 64)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--device", default=None)
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
@@ -58,7 +62,7 @@ def main(argv: list[str] | None = None) -> None:
         print(f"device: {device.name}; {args.shape}^3, seed {args.seed}, settings {options or 'defaults'}, "
               f"replayed up to {forecast.REPLAY_TERMS:.3g} terms a sweep")
         for name in args.names:
-            r = measure(name, args.shape, args.seed, device, options)
+            r = measure(name, args.shape, args.seed, device, options, args.size)
             first = "–" if r["first"] is None else f"{100 * r['first']:+.0f} %"
             worst = "–" if r["worst"] is None else f"{100 * r['worst']:+.0f} %"
             print(f"{name}: {r['seconds']:.1f} s, {r['sweeps']} finest sweeps; ETA error after the first: {first}, "

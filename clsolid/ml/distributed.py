@@ -160,6 +160,7 @@ class DaskTiles:
         if not workers:
             raise NoDeviceError("the Dask cluster has no workers: start some (dask worker ADDRESS), or use --workers N")
         self.workers = workers
+        self.parallel = len(workers)  # tiles run at once, at most (the tiles' search time shared among them)
         names = sorted(set(self._on_each(device_name, self.spec, options)))
         self.name = names[0] if len(names) == 1 else "; ".join(names)
         self.token = self.tables = self.sweep = None

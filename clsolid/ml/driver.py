@@ -15,6 +15,7 @@ from .forecast import affordable, forecast_visits, proxy_visits
 from ..exemplar import nearest_level_index
 from .model import ScaleModel, build_scale, check_exemplar_fits
 from .params import MLParams
+from .pruned import projects
 from ..core.philox import relax_tag
 from ..core.schedule import regions, set_order
 from ..core.scratch import Scratch
@@ -156,6 +157,10 @@ class _Clock:
         self.work = [np.prod(m.shape) * self._unit(m) for m in models]
         self.rate: float | None = None  # seconds per unit of work, measured
         self.visits: dict[int, int] = {}  # this scale's forecast: sweep -> voxels it visits
+        # What a sweep costs beside its projected search, per visit, over a sweep without one
+        # (its sum takes the search's candidates too): learnt at a scale, applied at the next.
+        self.extra = 1.0
+        self._searching_rate: float | None = None  # this scale's searching sweep, less its search, per visit
 
     def _unit(self, model: ScaleModel) -> int:
         """Terms per voxel visit: every site's window, or, pruned, at most the candidates and the sample."""
@@ -167,12 +172,18 @@ class _Clock:
     def plan(self, first: int, visits: list[int]) -> None:
         """The forecast visits of this scale's sweeps from *first* on."""
         self.visits = {first + k: v for k, v in enumerate(visits)}
+        self._searching_rate = None
 
     def _left_here(self, sweep: int, sweep_s: float, visited: int, t: float, t_prev: float, target: float,
-                   sweeps_left: int) -> float:
+                   sweeps_left: int, searched: float, level: int) -> float:
         if self.visits:
-            coming = sum(v for s, v in self.visits.items() if s > sweep)
-            return sweep_s * coming / visited if visited else 0.0
+            if not visited:
+                return 0.0
+            coming = {s: v for s, v in self.visits.items() if s > sweep}
+            searching = sum(v for s, v in coming.items() if projects(self.params, relax_tag(level, s)))
+            plain = sweep_s - searched if not searched else (sweep_s - searched) / self.extra
+            # the sweeps to come at this one's rate without its search, plus the search where they search too
+            return (plain * (sum(coming.values()) - searching) + sweep_s * searching) / visited
         ratio = t / t_prev if t_prev > 0 else 0.0
         if t <= target or ratio <= 0:
             left = 0
@@ -183,13 +194,21 @@ class _Clock:
         return sweep_s * left
 
     def eta(self, i: int, sweep: int, sweep_s: float, visited: int, model: ScaleModel, t: float, t_prev: float,
-            target: float, sweeps_left: int) -> float:
+            target: float, sweeps_left: int, searched: float = 0.0) -> float:
+        """Seconds left after *sweep* of scale *i*, which took *sweep_s*, *searched* of them in
+        the projected search (the pruned sum's first sweeps only, by default: a sweep that
+        searches costs several that do not, so the sweeps to come that do not are timed without it)."""
         unit = self._unit(model)
         if visited:
             self.rate = sweep_s / (visited * unit)
+            if searched:
+                self._searching_rate = (sweep_s - searched) / visited
+            elif self._searching_rate:
+                self.extra = self._searching_rate * visited / sweep_s
         if self.rate is None:
             return math.nan
-        here = 0.0 if sweeps_left == 0 else self._left_here(sweep, sweep_s, visited, t, t_prev, target, sweeps_left)
+        here = 0.0 if sweeps_left == 0 else self._left_here(sweep, sweep_s, visited, t, t_prev, target, sweeps_left,
+                                                            searched, model.level)
         if i + 1 == len(self.work):
             return float(here)
         if sweep_s < _MIN_TIMED_SWEEP:
@@ -320,7 +339,7 @@ def run_ml(
         scratch.free(temp)  # the back end holds the state now (its own temperatures): free the host's copies
         vol = temp = None
         for sweep in range(first, n_sweeps + 1):
-            t_sweep = time.perf_counter()
+            t_sweep, searched = time.perf_counter(), getattr(backend, "search_seconds", 0.0)
             scratch.free(active)  # the last sweep's
             if annealing:
                 active = scratch.apply(lambda i: ~i | resynth, bool, inherited)
@@ -345,6 +364,7 @@ def run_ml(
                 t_prev, t_now = t_now, float(np.sum(backend.temperature(), dtype=np.float64))
             visited = int(active.sum())
             sweep_s = time.perf_counter() - t_sweep
+            searched = getattr(backend, "search_seconds", 0.0) - searched
             record["temperatures"].append(t_now)
             record["visited"].append(visited)
             record["sweep_seconds"].append(sweep_s)
@@ -362,7 +382,7 @@ def run_ml(
                                          np.asarray(backend.sources()) if pruned else None))
             if progress is not None:
                 eta = clock.eta(i, sweep, sweep_s, visited, model, t_now, t_prev, target,
-                                0 if done else n_sweeps - sweep)
+                                0 if done else n_sweeps - sweep, searched)
                 progress(SweepInfo(scale=i + 1, n_scales=len(models), shape=model.shape, sweep=sweep,
                                    max_sweeps=n_sweeps, temperature=t_now,
                                    initial_temperature=t_init, target=target, visited=visited,

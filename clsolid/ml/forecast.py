@@ -9,7 +9,8 @@ the float64 reference's temperature update. The replay costs one neighbourhood s
 voxel and sweep, against the run's sum over every exemplar site; but it runs in NumPy, on
 one core, and the pruned sum is cheap: at 512^3 with 9 x 9 views (153 neighbours) the
 finest scale's replay ran for more than 35 minutes before its first sweep (measured with
-``tools/bench_scale.py --cases 64:512``). So a scale whose sweep would sum more than
+``tools/bench_scale.py --cases 64:512``), and at 128^3 with 11 x 11 views it took 43 s of a
+102 s run. So a scale whose sweep would sum more than
 :data:`REPLAY_TERMS` neighbour terms is not replayed (:func:`affordable`); a smaller block
 with the same structure is replayed in its place (:func:`proxy_visits`): the same rule,
 inherited corners and ``+in`` slice spacing, on a torus of a side that fits the budget,
@@ -31,9 +32,11 @@ from .model import ScaleModel
 from .reference import new_temperature
 
 #: Most neighbour terms (voxels x neighbours in the union of the views) a replayed sweep may
-#: sum: 2^30, an 11 x 11 run up to about 167^3, 9 x 9 to 190^3 (at 128^3, 9 x 9: 3.2e8 terms, a few
-#: seconds a sweep).
-REPLAY_TERMS = 2**30
+#: sum: 2^26, an 11 x 11 run up to about 65^3 (241 neighbours), 9 x 9 to 74^3; a larger scale
+#: replays a proxy of that side, a second or two. (It was 2^30, up to 167^3: at 128^3 the replay
+#: then took 40 % of a pruned run. At 2^24, a 41^3 proxy for 64^3, brick's ETA after the first
+#: finest sweep was 20 % under, against 0 % replayed whole.)
+REPLAY_TERMS = 2**26
 
 
 def affordable(model: ScaleModel) -> bool:

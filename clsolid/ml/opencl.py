@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from ..core import programs
@@ -87,6 +89,7 @@ class CLBackend:
         self.item_local = min(local_size, 4) if device.is_cpu else local_size
         self.name = device.name
         self.exact_visits = self.pruned_visits = 0  # voxel visits by sum, in the pruned mode
+        self.search_seconds = 0.0  # spent in the projected search (its sweeps cost more: the ETA's rate)
 
     # -- memory ------------------------------------------------------------------------
     def buffer_sizes(self, model: ScaleModel, n_labels: int, block=None,
@@ -228,12 +231,8 @@ class CLBackend:
         self.n_groups, self.n_chunks = gvals.size, chunk_group.size
         self.patches = self._buf(patches)
         self.chunk_group, self.chunk_valid = self._buf(chunk_group), self._buf(chunk_valid)
-        self.gvals = self._buf(gvals)
-        # Gaussian factor of every (group, label) pair, label rows padded to whole vectors.
-        kern = np.zeros((gvals.size, self._pad(n_labels)), np.float32)
-        kern[:, :n_labels] = np.exp(-difference(gvals[:, None], model.labels[None, :], model.mismatch, model.costs)
-                                    / (2.0 * model.bandwidth**2))
-        self.kern = self._buf(kern)
+        # The Gaussian factor of every (group, label) pair and its log (decide's view_logf).
+        self.kern = self._buf(kernel_tables(model, gvals, self._pad(n_labels)))
         self.labels = self._buf(model.labels.astype(np.float32))
         self.offsets = self._buf(model.offsets.astype(np.int32))
         self.union = self._buf(model.union_offsets.astype(np.int32))
@@ -352,10 +351,14 @@ class CLBackend:
         if n_exact < voxels.size:
             items = (self._global(n_items - n_exact * views, self.item_local),)
             if self.projection is not None and self.n_projected:
+                q.finish()  # timed alone: the sweeps without it are the ETA's rate
+                t0 = time.perf_counter()
                 self.k["projected_nearest"](
                     q, items, (self.item_local,), self.vol_buf, *self._shape_args(), self.vox_buf,
                     np.int32(n_exact * views), np.int32(n_items), np.int32(views), self.offsets, *self.projection,
                     self.projected_out)
+                q.finish()
+                self.search_seconds += time.perf_counter() - t0
             self.k["parzen_candidates"](
                 q, items, (self.item_local,),
                 self.vol_buf, self.temp_buf, *self._shape_args(), *self.placement, self.vox_buf,
@@ -392,8 +395,8 @@ class CLBackend:
         self.k["decide"](
             self.device.queue, (self._global(voxels.size, self.item_local),), (self.item_local,),
             self.vol_buf, self.temp_buf, *self._shape_args(), *self.placement, self.vox_buf,
-            np.int32(voxels.size), np.int32(m.offsets.shape[0]), self.sums, np.int32(self.n_groups), self.gvals,
-            self.kern, self.labels, np.int32(m.labels.size), self.kfactor, self.union,
+            np.int32(voxels.size), np.int32(m.offsets.shape[0]), self.sums, np.int32(self.n_groups),
+            self.kern, self.labels, np.int32(m.labels.size), self.union,
             np.int32(m.union_offsets.shape[0]), np.float32(self.params.xi), np.int32(self.params.heuristic_code),
             *self.sweep_args, *self.score_args)
 
@@ -492,10 +495,20 @@ class CLBackend:
         out = np.empty(n_items * n_labels, np.float32)
         buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, out.nbytes)
         self.k["lcpdf"](self.device.queue, (self._global(n_items),), (self.local,), self.sums,
-                        np.int32(n_items), np.int32(self.n_groups), self.gvals, self.kern, self.labels,
-                        np.int32(n_labels), self.kfactor, buf)
+                        np.int32(n_items), np.int32(self.n_groups), self.kern, np.int32(n_labels), buf)
         cl.enqueue_copy(self.device.queue, out, buf)
         return out.reshape(voxels.size, -1, n_labels)[rows].transpose(1, 0, 2)
+
+
+def kernel_tables(model: ScaleModel, group_values: np.ndarray, width: int) -> np.ndarray:
+    """The decision's tables ``(2, groups, width)``, float32: ``exp(L)`` and ``L``, the log Gaussian
+    factor ``L = -difference(value, label) / (2 h^2)`` of every (group value, label) pair, label rows
+    padded to *width* with 1 and 0 (a padding lane then never looks underflowed)."""
+    table = np.zeros((2, group_values.size, width))
+    table[1, :, : model.labels.size] = -difference(group_values[:, None], model.labels[None, :], model.mismatch,
+                                                   model.costs) / (2.0 * model.bandwidth**2)
+    table[0] = np.exp(table[1])
+    return table.astype(np.float32)
 
 
 def _pruned_sizes(model: ScaleModel, params: MLParams, batch: int) -> dict[str, int]:

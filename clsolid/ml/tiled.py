@@ -111,25 +111,28 @@ class TileJob:
 @dataclass
 class TileResult:
     """What a tile gives back: its voxels' values, temperatures and sources ``(views, m)``,
-    the rows of scores asked for, and the visits it made with each sum ``(exact, pruned)``."""
+    the rows of scores asked for, the visits it made with each sum ``(exact, pruned)`` and the
+    seconds its projected search took."""
 
     values: np.ndarray
     temperatures: np.ndarray
     sources: np.ndarray
     scores: np.ndarray
     visits: tuple[int, int]
+    searched: float = 0.0
 
 
 def run_tile(engine: Any, job: TileJob) -> TileResult:
     """Relax a tile's voxels of a set on *engine* (a :class:`~clsolid.ml.opencl.CLBackend`
     holding the scale's tables and the sweep's arguments)."""
-    before = engine.exact_visits, engine.pruned_visits
+    before = engine.exact_visits, engine.pruned_visits, engine.search_seconds
     if job.volume is not None:
         engine.load_state(job.volume, job.temperature, job.sources, job.origin)
     engine.update(job.voxels)
     values, temperatures, sources = engine.read_voxels(job.voxels)
     return TileResult(values, temperatures, sources, engine.read_scores(job.score_rows),
-                      (engine.exact_visits - before[0], engine.pruned_visits - before[1]))
+                      (engine.exact_visits - before[0], engine.pruned_visits - before[1]),
+                      engine.search_seconds - before[2])
 
 
 class LocalTiles:
@@ -185,6 +188,7 @@ class TiledBackend:
         self.runner = runner if hasattr(runner, "map") else LocalTiles(runner)
         self.name = self.runner.name
         self.exact_visits = self.pruned_visits = 0  # voxel visits by sum, in the pruned mode
+        self.search_seconds = 0.0  # the tiles' projected search, per worker running them at once
         self._held = None
 
     def prepare(self, models: list[ScaleModel], params: MLParams | None = None) -> None:
@@ -235,6 +239,7 @@ class TiledBackend:
             self._scores[rows] = r.scores
             self.exact_visits += r.visits[0]
             self.pruned_visits += r.visits[1]
+            self.search_seconds += r.searched / getattr(self.runner, "parallel", 1)
 
     def volume(self) -> np.ndarray:
         return self._vol

@@ -122,7 +122,7 @@ inline void add_chunk(floatv a, float cmin, float k, float *gmin, float *gsum)
 
 /* A neighbour's pair (xw, w) from its value x and weight wr = 1 - t: (wr x, wr) for squared
  * differences, (x, wr^2) for mismatches; ADD_TERM then adds wr^2 (x - p)^2 or wr^2 [x != p]
- * to acc, for the exemplar values p (of type T); KDIST(k, a, b) is k (a - b)^2 or k [a != b]. */
+ * to acc, for the exemplar values p (of type T). */
 /* The fall-off (FALLOFF defined): neighbour r's weight 1 - t times FALLOFF_ROOT[r], the square
  * root of its Gaussian weight, so that its term weighs (1 - t)^2 times that weight. Undefined,
  * the weight is left as it is (not multiplied by 1, which could change how terms are fused). */
@@ -139,15 +139,12 @@ __constant float FALLOFF_ROOT[] = {FALLOFF};
 __constant float COST[] = {COSTS};
 #define PAIR(x, wr, xw, w) { xw = COST[(int)(x)]; w = (wr) * (wr); }
 #define ADD_TERM(T, acc, xw, w, p) { acc += select((T)(0.0f), (w) * ((T)(xw) + (p)), (p) != (T)(xw)); }
-#define KDIST(k, a, b) ((a) != (b) ? (k) * (COST[(int)(a)] + COST[(int)(b)]) : 0.0f)
 #elif MISMATCH
 #define PAIR(x, wr, xw, w) { xw = (x); w = (wr) * (wr); }
 #define ADD_TERM(T, acc, xw, w, p) { acc += select((T)(0.0f), (T)(w), (p) != (T)(xw)); }
-#define KDIST(k, a, b) ((a) != (b) ? (k) : 0.0f)
 #else
 #define PAIR(x, wr, xw, w) { xw = (wr) * (x); w = (wr); }
 #define ADD_TERM(T, acc, xw, w, p) { T d_ = (xw) - (w) * (p); acc += d_ * d_; }
-#define KDIST(k, a, b) ((k) * ((a) - (b)) * ((a) - (b)))   /* a macro: fused as the caller's expression */
 #endif
 
 /* For VB voxel-views per work item: the log of the Parzen sum of each centre-value group,
@@ -355,11 +352,12 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
         int j = shifted(z, y, x, Z, Y, X, off + 3 * r);
         PAIR(vol[j], TERM_WEIGHT(1.0f - temp[j], r), xws[r], ws[r])
     }
-    float gmax[NGMAX], gsum[NGMAX];
-    for (int g = 0; g < n_groups; ++g) {
-        gmax[g] = -INFINITY;
-        gsum[g] = 0.0f;
+    floatv gmaxv[NGV], gsumv[NGV];   /* a group at a time below, a vector at a time at the end */
+    for (int j = 0; j < NGV; ++j) {
+        gmaxv[j] = (floatv)(-INFINITY);
+        gsumv[j] = (floatv)(0.0f);
     }
+    float *gmax = (float *)gmaxv, *gsum = (float *)gsumv;
     float best = INFINITY;
     int best_w = 0;
     int n_sites = grid_rows * grid_cols, start = 0;
@@ -413,8 +411,10 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
         }
     }
     if (best < INFINITY) src[view * n_vox + voxel] = win_source[best_w];
-    for (int g = 0; g < NGV * VW; ++g)
-        log_sums[(size_t)item * NGV * VW + g] = g < n_groups && gsum[g] > 0.0f ? gmax[g] + log(gsum[g]) : -INFINITY;
+    /* groups without terms (the padding's too) hold a sum of 0: -inf */
+    __global floatv *out = (__global floatv *)(log_sums + (size_t)item * NGV * VW);
+    for (int j = 0; j < NGV; ++j)
+        out[j] = select((floatv)(-INFINITY), gmaxv[j] + log(gsumv[j]), isgreater(gsumv[j], (floatv)(0.0f)));
 }
 
 #if PROJ_K > 0
@@ -533,15 +533,17 @@ inline float vmax_all(const floatv *v, int n)
 }
 
 /* Normalised log f_view(label) for every label, as NLV vectors; lanes past n_labels = -inf.
- *   log f(label) = log sum_g exp(ls_g - k (label - value_g)^2)   ([label != value_g]: MISMATCH)
- * Fast path: with M = max_g ls_g, f = M + log sum_g exp(ls_g - M) * kern[g][label], where
- * kern = exp(-k (label - value)^2) is tabulated on the host ([group][label], padded).
+ *   log f(label) = log sum_g exp(ls_g + L[g][label]),   L = -k (label - value_g)^2 ([label != value_g]: MISMATCH)
+ * kern holds two tables [group][label] made on the host, label rows padded to whole vectors:
+ * exp(L) (padding 1), then L (padding 0), so a padding lane is never taken for an underflow.
+ * Fast path: with M = max_g ls_g, f = M + log sum_g exp(ls_g - M) exp(L[g][label]).
  * Where that sum is too small to trust in float32 (a label far from every likely group)
- * the label is recomputed exactly, subtracting its own maximum, so no value underflows.
+ * the label is summed again exactly, subtracting its own maximum over the groups, so no
+ * term underflows; a vector of labels at a time, a group's terms only where one of those
+ * labels would add more than exp(NEGLIGIBLE) of its maximum.
  * ls has NGV*VW entries; padding groups hold -inf. */
-inline void view_logf(__global const float *ls, int n_groups, __global const float *kern,
-                      __global const float *gval, __global const float *labels, int n_labels,
-                      float k, floatv *f)
+inline void view_logf(__global const float *ls, int n_groups, __global const float *kern, int n_labels,
+                      floatv *f)
 {
     floatv e[NGV];
     for (int j = 0; j < NGV; ++j) e[j] = ((__global const floatv *)ls)[j];
@@ -558,29 +560,22 @@ inline void view_logf(__global const float *ls, int n_groups, __global const flo
         __global const floatv *row = (__global const floatv *)(kern + g * NLV * VW);
         for (int j = 0; j < NLV; ++j) f[j] += es[g] * row[j];
     }
-    float *fs = (float *)f;
-    for (int l = 0; l < NLV * VW; ++l) {
-        float s = fs[l];
-        if (l >= n_labels) {
-            fs[l] = -INFINITY;
-        } else if (s > 1e-30f) {
-            fs[l] = M + log(s);
-        } else {
-            float lam = labels[l], mx = -INFINITY;
-            for (int i = 0; i < n_near; ++i) {
-                int g = near[i];
-                float x = ls[g] - KDIST(k, lam, gval[g]);
-                mx = x > mx ? x : mx;
-            }
-            s = 0.0f;
-            for (int i = 0; i < n_near; ++i) {
-                int g = near[i];
-                float x = ls[g] - KDIST(k, lam, gval[g]) - mx;
-                if (x > NEGLIGIBLE) s += exp(x);
-            }
-            fs[l] = mx + log(s);
+    __global const floatv *lkern = (__global const floatv *)(kern + n_groups * NLV * VW);
+    for (int j = 0; j < NLV; ++j) {
+        intv slow = islessequal(f[j], (floatv)(1e-30f));
+        f[j] = (floatv)(M) + log(f[j]);
+        if (!any(slow)) continue;
+        floatv mx = (floatv)(-INFINITY), s = (floatv)(0.0f);
+        for (int i = 0; i < n_near; ++i)
+            mx = fmax(mx, (floatv)(ls[near[i]]) + lkern[near[i] * NLV + j]);
+        for (int i = 0; i < n_near; ++i) {
+            floatv x = (floatv)(ls[near[i]]) + lkern[near[i] * NLV + j] - mx;
+            if (any(slow & isgreater(x, (floatv)(NEGLIGIBLE)))) s += exp(x);
         }
+        f[j] = select(f[j], mx + log(s), slow);
     }
+    float *fs = (float *)f;
+    for (int l = n_labels; l < NLV * VW; ++l) fs[l] = -INFINITY;
     /* normalise over the labels (eq. 4.4) */
     float mx = vmax_all(f, NLV);
     floatv acc = (floatv)(0.0f);
@@ -596,20 +591,22 @@ inline float unit_float(uint u)
 }
 
 /* Gibbs: the index drawn from the distribution proportional to exp(score[l]), l < n, by
- * inverting its cumulative sum at r * total, r in [0, 1). */
-inline int draw_label(const float *score, int n, float r)
+ * inverting its cumulative sum at r * total, r in [0, 1). score: NLV vectors, -inf past n
+ * (its exponentials a vector at a time; the sums in label order). */
+inline int draw_label(const floatv *score, int n, float r)
 {
-    float mx = score[0];
-    for (int l = 1; l < n; ++l) mx = fmax(mx, score[l]);
+    floatv wv[NLV];
+    float mx = vmax_all(score, NLV);
+    for (int j = 0; j < NLV; ++j) wv[j] = exp(score[j] - (floatv)(mx));
+    const float *w = (const float *)wv;
     float total = 0.0f;
-    for (int l = 0; l < n; ++l) total += exp(score[l] - mx);
+    for (int l = 0; l < n; ++l) total += w[l];
     float target = r * total, cum = 0.0f;
     int last = 0;
     for (int l = 0; l < n; ++l) {
-        float w = exp(score[l] - mx);
-        if (w > 0.0f) {
+        if (w[l] > 0.0f) {
             last = l;
-            cum += w;
+            cum += w[l];
             if (cum > target) return l;
         }
     }
@@ -657,9 +654,8 @@ inline int nearest_label(__global const float *labels, int n, float x)
 __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, int X,
                      int oz, int oy, int ox, int GZ, int GY, int GX,
                      __global const int *voxels, int n_voxels, int n_views,
-                     __global const float *log_sums, int n_groups,
-                     __global const float *group_values, __global const float *kern,
-                     __global const float *labels, int n_labels, float k,
+                     __global const float *log_sums, int n_groups, __global const float *kern,
+                     __global const float *labels, int n_labels,
                      __global const int *union_offsets, int n_union, float xi,
                      int heuristic, int relaxation, __global const float *bias,
                      uint key0, uint key1, uint tag, float t_in,
@@ -671,8 +667,7 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
 
     floatv fv[NVIEW][NLV];
     for (int v = 0; v < n_views; ++v)
-        view_logf(log_sums + (size_t)(i * n_views + v) * NGV * VW, n_groups, kern, group_values,
-                  labels, n_labels, k, fv[v]);
+        view_logf(log_sums + (size_t)(i * n_views + v) * NGV * VW, n_groups, kern, n_labels, fv[v]);
 
     int z = voxel / (Y * X), rem = voxel - z * Y * X;
     int y = rem / X, x = rem - y * X;
@@ -714,7 +709,7 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
         if (relaxation == 0)
             value = labels[first_best(cs, n_labels)];
         else if (relaxation == 1)
-            value = labels[draw_label(cs, n_labels, unit_float(u[0]))];
+            value = labels[draw_label(comb, n_labels, unit_float(u[0]))];
         else
             value = accept(cs[prop], cs[cur], t_in, unit_float(u[1])) ? labels[prop] : x_s;
     } else {
@@ -734,7 +729,7 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
                 best = first_best(fs, n_labels);
                 val = labels[best];
             } else if (relaxation == 1) {
-                best = draw_label(fs, n_labels, unit_float(u[v]));
+                best = draw_label(fv[v], n_labels, unit_float(u[v]));
                 val = labels[best];
             } else if (accept(fs[prop], fs[cur], t_in, unit_float(u[1 + v]))) {
                 best = prop;
@@ -779,14 +774,13 @@ __kernel void pack_state(__global const float *vol, __global const float *temp, 
 
 /* The normalised per-label log LCPDF of each voxel-view (for tests and diagnostics):
  * out[item][label], with the same code path as decide. */
-__kernel void lcpdf(__global const float *log_sums, int n_items, int n_groups,
-                    __global const float *group_values, __global const float *kern,
-                    __global const float *labels, int n_labels, float k, __global float *out)
+__kernel void lcpdf(__global const float *log_sums, int n_items, int n_groups, __global const float *kern,
+                    int n_labels, __global float *out)
 {
     int i = get_global_id(0);
     if (i >= n_items) return;
     floatv f[NLV];
-    view_logf(log_sums + (size_t)i * NGV * VW, n_groups, kern, group_values, labels, n_labels, k, f);
+    view_logf(log_sums + (size_t)i * NGV * VW, n_groups, kern, n_labels, f);
     const float *fs = (const float *)f;
     for (int l = 0; l < n_labels; ++l) out[(size_t)i * n_labels + l] = fs[l];
 }
