@@ -86,7 +86,10 @@ TARGETS = {  # (exemplar, target): None if met, else why not
     ("composite3", "histogram"): None, ("gravel", "histogram"): None,
     ("composite3", "patch"): None, ("gravel", "patch"): None, ("fibres", "patch"): None,
     ("gravel", "autocorrelation"): None,
-    ("composite3", "autocorrelation"): None,  # 0.26 weighted; 0.34 with plain mismatches, -0.04 squared
+    # 0.26 weighted until the decision's exact path went vector-wise (same law, other last bits);
+    # 0.34 with plain mismatches, -0.04 squared
+    ("composite3", "autocorrelation"): "0.30 (seed 1): on the limit, a coin flip by seed (6 seeds, "
+                                       "tools/gallery.py: mean 0.310 before, 0.305 after; 3 and 2 met)",
     ("fibres", "autocorrelation"): None,  # -0.07/-0.11 at 11x11; 0.28/0.31 at 9x9
     ("hrtem", "histogram"): None, ("hrtem", "mirror"): None,
     ("hrtem", "patch"): None,  # 0.15/0.14 with the fall-off (sigma 3); 0.29/0.37 without
