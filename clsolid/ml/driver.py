@@ -181,7 +181,7 @@ class _Clock:
                 return 0.0
             coming = {s: v for s, v in self.visits.items() if s > sweep}
             searching = sum(v for s, v in coming.items() if projects(self.params, relax_tag(level, s)))
-            plain = sweep_s - searched if not searched else (sweep_s - searched) / self.extra
+            plain = (sweep_s - searched) / self.extra if searched else sweep_s
             # the sweeps to come at this one's rate without its search, plus the search where they search too
             return (plain * (sum(coming.values()) - searching) + sweep_s * searching) / visited
         ratio = t / t_prev if t_prev > 0 else 0.0
@@ -339,7 +339,7 @@ def run_ml(
         scratch.free(temp)  # the back end holds the state now (its own temperatures): free the host's copies
         vol = temp = None
         for sweep in range(first, n_sweeps + 1):
-            t_sweep, searched = time.perf_counter(), getattr(backend, "search_seconds", 0.0)
+            t_sweep, searched_before = time.perf_counter(), getattr(backend, "search_seconds", 0.0)
             scratch.free(active)  # the last sweep's
             if annealing:
                 active = scratch.apply(lambda i: ~i | resynth, bool, inherited)
@@ -364,7 +364,7 @@ def run_ml(
                 t_prev, t_now = t_now, float(np.sum(backend.temperature(), dtype=np.float64))
             visited = int(active.sum())
             sweep_s = time.perf_counter() - t_sweep
-            searched = getattr(backend, "search_seconds", 0.0) - searched
+            searched = getattr(backend, "search_seconds", 0.0) - searched_before
             record["temperatures"].append(t_now)
             record["visited"].append(visited)
             record["sweep_seconds"].append(sweep_s)
