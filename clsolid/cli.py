@@ -72,8 +72,8 @@ def _add_synth(sub) -> None:
     p.add_argument("--no-parent", action="store_true",
                    help="wl: match the k x k square alone, without the coarser scale's 3 x 3")
     p.add_argument("--parent-weight", type=float, default=None,
-                   help="wl, kopf, chen-wang: each parent term's weight in the distance against 1 for the "
-                        "square's (default: 4 for kopf, 1 for the others)")
+                   help="each of the coarser scale's 3 x 3 parent terms' weight in the distance against 1 for "
+                        "the square's (default: 4 for kopf, 1 for wl and chen-wang; ml: 0, none, the thesis)")
     p.add_argument("--init", choices=("upsample", "noise"), default="upsample",
                    help="wl: a finer scale starts from the coarser result up-sampled (default) or from noise")
     p.add_argument("--rule", choices=RULES, default="centres",
@@ -338,13 +338,13 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "prune_similar", "prune_sample", "prune_min_weight", "prune_projected", "prune_projected_k",
             "prune_projected_probe", "prune_projected_sweeps", "falloff", "region", "tile", "scratch", "scheduler",
             "workers", "indices", "track")
-_WL_ONLY = ("iterations", "inner", "no_parent", "parent_weight", "init", "rule", "order", "causal", "histogram",
+_WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram",
             "candidates", "specify", "search", "exact_passes", "site_map", "source_map")
 
 
 #: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
 _RESUME_FIXED = ("exemplar", "shape", "method", "preset", "heuristic", "neighborhood", "scales", "views", "levels",
-                 "seed", "builtin_size", "checkpoint", "track") + _WL_ONLY + tuple(
+                 "seed", "builtin_size", "checkpoint", "track", "parent_weight") + _WL_ONLY + tuple(
                      n for n in _ML_ONLY if n not in ("indices", "track", "tile", "scratch", "scheduler", "workers"))
 
 
@@ -409,6 +409,8 @@ def _ml_options(args) -> dict:
                    prune_projected_k=args.prune_projected_k, prune_projected_probe=args.prune_projected_probe,
                    prune_projected_sweeps=args.prune_projected_sweeps,
                    falloff=args.falloff, region=args.region)
+    if args.parent_weight is not None:
+        options["parent_weight"] = args.parent_weight
     if args.tile is not None:
         options["tile"] = args.tile
     if args.scratch is not None:

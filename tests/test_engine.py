@@ -91,9 +91,9 @@ def test_fixed_inherited_voxels_keep_coarse_values(small_labels):
     seen = {}
 
     class Spy(ReferenceBackend):
-        def start_scale(self, model, vol, temp, p, sources=None):
+        def start_scale(self, model, vol, temp, p, sources=None, parent=None):
             seen.setdefault("starts", []).append(vol.copy())
-            super().start_scale(model, vol, temp, p, sources)
+            super().start_scale(model, vol, temp, p, sources, parent)
 
     out, timings, _ = run_ml(small_labels, (8, 8, 8), params, 2, Spy())
     coarse_start = seen["starts"][1][::2, ::2, ::2]
@@ -105,9 +105,9 @@ def test_8_of_8_upsampling_copies_into_all_children(small_labels):
     starts = []
 
     class Spy(ReferenceBackend):
-        def start_scale(self, model, vol, temp, p, sources=None):
+        def start_scale(self, model, vol, temp, p, sources=None, parent=None):
             starts.append((vol.copy(), temp.copy()))
-            super().start_scale(model, vol, temp, p, sources)
+            super().start_scale(model, vol, temp, p, sources, parent)
 
         def volume(self):
             return super().volume()

@@ -67,9 +67,9 @@ def scale_starts(labels, shape, params, seed=5) -> list:
     starts = []
 
     class Spy(ReferenceBackend):
-        def start_scale(self, model, vol, temp, p, sources=None):
+        def start_scale(self, model, vol, temp, p, sources=None, parent=None):
             starts.append((model, vol.copy(), temp.copy()))
-            super().start_scale(model, vol, temp, p, sources)
+            super().start_scale(model, vol, temp, p, sources, parent)
 
     run_ml(labels, shape, params, seed, Spy())
     return starts

@@ -45,9 +45,9 @@ class _Probe(CLBackend):
         super().__init__(device)
         self.sample, self.rows, self.rng, self.pca, self.probe = sample, [], np.random.default_rng(0), pca, probe
 
-    def start_scale(self, model: ScaleModel, vol, temp, params, sources=None) -> None:
+    def start_scale(self, model: ScaleModel, vol, temp, params, sources=None, parent=None) -> None:
         self.sweep, self.tag = -1, None  # start_scale's own start_sweep is not a sweep
-        super().start_scale(model, vol, temp, params, sources)
+        super().start_scale(model, vol, temp, params, sources, parent)
         self.pruning = pruned.Pruning(model, params)
         self.projected = None if self.pca is None else pruned.ProjectedWindows.of(model, self.pca[0], self.probe)
 

@@ -13,7 +13,7 @@ import numpy as np
 from .balance import project_bias, score_rows, score_stride, softmax, sweep_target
 from .forecast import affordable, forecast_visits, proxy_visits
 from ..exemplar import nearest_level_index
-from .model import ScaleModel, build_scale, check_exemplar_fits
+from .model import ScaleModel, build_scale, check_exemplar_fits, parent_block
 from .params import MLParams
 from .pruned import projects
 from ..core.philox import relax_tag
@@ -239,14 +239,16 @@ class RunState:
     bias: np.ndarray
     timings: dict
     sources: np.ndarray | None = None  # the pruned likelihood's per-view sources (None: exact)
+    parent: np.ndarray | None = None  # the scale's parent block (parent_weight > 0, below the coarsest)
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The state as named arrays (for :func:`clsolid.core.checkpoint.write_checkpoint`)."""
         out = {"volume": self.volume, "temperature": self.temperature, "inherited": self.inherited,
                "bias": self.bias, "scalars": np.array([self.t_init, self.target, self.t_now]),
                "position": np.array([self.scale, self.sweep, int(self.done)])}
-        if self.sources is not None:
-            out["sources"] = self.sources
+        for name in ("sources", "parent"):
+            if getattr(self, name) is not None:
+                out[name] = getattr(self, name)
         return out
 
     @classmethod
@@ -254,7 +256,7 @@ class RunState:
         scale, sweep, done = (int(v) for v in a["position"])
         t_init, target, t_now = (float(v) for v in a["scalars"])
         return cls(scale, sweep, bool(done), a["volume"], a["temperature"], np.asarray(a["inherited"], bool),
-                   t_init, target, t_now, a["bias"], timings, a.get("sources"))
+                   t_init, target, t_now, a["bias"], timings, a.get("sources"), a.get("parent"))
 
 
 def run_ml(
@@ -304,16 +306,18 @@ def run_ml(
         if resume is not None and (i < resume.scale or (i == resume.scale and resume.done)):
             continue
         t_scale = time.perf_counter()
-        first, sources = 1, None
+        first, sources, parent = 1, None, None
         if resume is not None and i == resume.scale:  # go on with the sweep after the checkpoint's
             r = resume
             vol, temp, inherited = r.volume.reshape(model.shape), r.temperature.reshape(model.shape), r.inherited
             t_init, target, t_now, first = r.t_init, r.target, r.t_now, r.sweep + 1
             bias = np.array(r.bias, dtype=np.float64)
-            sources = r.sources
+            sources, parent = r.sources, r.parent
             record = timings["scales"].pop()
         else:
             vol, temp = start_state(model, base, coarse, params, seed, scratch)
+            if model.parent_rows:
+                parent = parent_block(coarse, model.shape, scratch.empty(model.shape, np.float32))
             if model.level == 0:
                 scratch.free(base)
                 base = None  # the finest scale has taken all it needs from the random start
@@ -327,7 +331,9 @@ def run_ml(
             record = {"level": model.level, "shape": list(model.shape), "bandwidth": model.bandwidth,
                       "n_sites": model.n_sites, "n_sets": model.n_sets, "initial_temperature": t_init,
                       "temperatures": [], "visited": [], "sweep_seconds": []}
-        backend.start_scale(model, vol, temp, params, sources=sources)
+        if model.parent_rows and parent is None:
+            raise ValueError("this checkpoint has no parent block; resume it with the clsolid that wrote it")
+        backend.start_scale(model, vol, temp, params, sources=sources, parent=parent)
         balance = Balance(model, params.balance, vol, bias, scratch) if params.balance else None
         if progress is not None and not annealing:  # the ETA's sweeps, known before they run where affordable
             if affordable(model):
@@ -379,7 +385,7 @@ def run_ml(
                                          np.asarray(backend.temperature()), inherited, t_init,
                                          target, t_now, np.array(bias, dtype=np.float64),
                                          {"scales": timings["scales"] + [record]},
-                                         np.asarray(backend.sources()) if pruned else None))
+                                         np.asarray(backend.sources()) if pruned else None, parent))
             if progress is not None:
                 eta = clock.eta(i, sweep, sweep_s, visited, model, t_now, t_prev, target,
                                 0 if done else n_sweeps - sweep, searched)
@@ -390,7 +396,7 @@ def run_ml(
                                    exemplar=model.exemplar, volume=lambda: np.array(backend.volume(), copy=True)))
             if done:
                 break
-        for done_with in (inherited, active, balance.index if balance is not None else None):
+        for done_with in (inherited, active, parent, balance.index if balance is not None else None):
             scratch.free(done_with)  # this scale's masks and labels (on disk: their files)
         active = None
         coarse = np.asarray(backend.volume()).reshape(model.shape)  # float32 on a device, as the state

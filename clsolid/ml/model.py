@@ -55,6 +55,44 @@ def wrapped_coords(voxels: np.ndarray, shape, offsets: np.ndarray) -> np.ndarray
     return flat
 
 
+def parent_offsets(view: str) -> np.ndarray:
+    """``(9, 3)`` offsets of a voxel's parent square in *view*: the coarser scale's 3 x 3 around
+    its parent, row-major, read from the parent block (:func:`parent_block`), where the coarser
+    voxel s // 2 + d lies at s + 2 d."""
+    row_axis, col_axis = VIEW_AXES[view]
+    out = np.zeros((9, 3), np.int32)
+    for i, (dr, dc) in enumerate((dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1)):
+        out[i, row_axis], out[i, col_axis] = 2 * dr, 2 * dc
+    return out
+
+
+def parent_block(coarse: np.ndarray, shape: tuple[int, int, int], out: np.ndarray | None = None) -> np.ndarray:
+    """The coarser scale's volume repeated twice along each axis and cut to this scale's
+    *shape* (float32, as the state; into *out*, such as a scratch file's, if given): the
+    block the parent terms read (:func:`parent_offsets`)."""
+    out = np.empty(shape, np.float32) if out is None else out
+    for dz, dy, dx in np.ndindex(2, 2, 2):  # eight strided copies: no repeated block in memory
+        part = out[dz::2, dy::2, dx::2]
+        part[...] = coarse[: part.shape[0], : part.shape[1], : part.shape[2]]
+    return out
+
+
+def parent_tables(coarse_exemplar: np.ndarray, shape: tuple[int, int], half: int) -> np.ndarray:
+    """``(9, n)``: the parent square of every valid site (as :func:`exemplar_tables` orders
+    them) of an exemplar of *shape* whose coarser scale is *coarse_exemplar*: the coarser
+    exemplar at (the site's centre // 2) + d, as a voxel's (:func:`parent_offsets`). Where that
+    leaves the coarser exemplar (windows narrower than 5, at the edge) its edge pixel stands in."""
+    rows = np.arange(half, shape[0] - half) // 2
+    cols = np.arange(half, shape[1] - half) // 2
+    out = []
+    for dr in (-1, 0, 1):
+        r = np.clip(rows + dr, 0, coarse_exemplar.shape[0] - 1)
+        for dc in (-1, 0, 1):
+            c = np.clip(cols + dc, 0, coarse_exemplar.shape[1] - 1)
+            out.append(coarse_exemplar[np.ix_(r, c)].ravel())
+    return np.array(out, np.float64)
+
+
 def exemplar_tables(exemplar: np.ndarray, half: int) -> tuple[np.ndarray, np.ndarray]:
     """Centre values ``(n,)`` and neighbour values ``(R, n)`` of every valid exemplar site.
 
@@ -194,7 +232,8 @@ class ScaleModel:
     n_sets: int  # conflict-free colour sets
     mismatch: bool = False  # distance="mismatch" or "weighted": [a != b] for (a - b)^2 (see difference)
     costs: np.ndarray | None = None  # distance="weighted": each label's half-cost (phase_costs)
-    term_weight: np.ndarray | None = None  # (R,) the fall-off's weight of each neighbour (falloff_weights)
+    term_weight: np.ndarray | None = None  # (R,) each term's weight: the fall-off's, the parent_weight
+    parent_rows: int = 0  # the last rows of offsets and patches: the parent square's (parent_offsets), or none
 
     def coded(self, values: np.ndarray) -> np.ndarray:
         """Label *values* as the kernels compare them: themselves, or with :attr:`costs` their
@@ -202,6 +241,22 @@ class ScaleModel:
         if self.costs is None:
             return values
         return self.costs[np.asarray(values).astype(np.intp)]
+
+    def neighbour_coords(self, voxels: np.ndarray, view: int) -> np.ndarray:
+        """``(m, R)`` flat indices of the terms of *voxels* in *view*, into the state
+        :meth:`with_parent` extends: a parent row's index is past the volume's voxels."""
+        flat = wrapped_coords(voxels, self.shape, self.offsets[view])
+        if self.parent_rows:
+            flat[:, -self.parent_rows:] += int(np.prod(self.shape))
+        return flat
+
+    def with_parent(self, values: np.ndarray, parent: np.ndarray | None) -> np.ndarray:
+        """*values* (a volume or its temperatures), flat, followed by the *parent* block's
+        (:func:`parent_block`; for temperatures zeros: the parent terms are trusted) where the
+        model has parent rows; else *values* flat."""
+        if not self.parent_rows:
+            return np.ravel(values)
+        return np.concatenate([np.ravel(values), np.ravel(parent).astype(np.asarray(values).dtype)])
 
     @property
     def n_sites(self) -> int:
@@ -252,8 +307,17 @@ def build_scale(
         factor = params.bandwidth_factor[level]
         h = silverman(sigma, centres.size, params.neighborhood**2) * factor if sigma > 0 else 1.0
     offsets = np.stack([view_offsets(v, half) for v in params.view_names])
-    union = np.unique(offsets.reshape(-1, 3), axis=0)
+    union = np.unique(offsets.reshape(-1, 3), axis=0)  # the temperatures' neighbours: no parent terms
     sshape = scale_shape(shape, level)
+    weight = falloff_weights(offsets[0], params.falloff or 0.0)  # every view's rows pair alike
+    parents = 0
+    if params.parent_weight and level < params.scales - 1:  # the coarsest scale has no parent
+        coarse = scale_exemplar(labels_img, level + 1, params.pyramid, phases=mismatch)
+        patches = np.concatenate([patches, parent_tables(coarse, ex.shape, half)])
+        offsets = np.concatenate([offsets, np.stack([parent_offsets(v) for v in params.view_names])], axis=1)
+        weight = np.concatenate([np.ones(offsets.shape[1] - 9) if weight is None else weight,
+                                 np.full(9, float(params.parent_weight))])
+        parents = 9
     return ScaleModel(
         level=level,
         shape=sshape,
@@ -268,5 +332,6 @@ def build_scale(
         n_sets=set_count(sshape, half),
         mismatch=mismatch,
         costs=costs,
-        term_weight=falloff_weights(offsets[0], params.falloff or 0.0),  # every view's rows pair alike
+        term_weight=weight,
+        parent_rows=parents,
     )

@@ -102,9 +102,10 @@ class CLBackend:
         views, nr = model.offsets.shape[:2]
         chunks = int(np.sum(-(-np.bincount(np.unique(model.centres, return_inverse=True)[1]) // self.vw)))
         batch = min(self.max_batch, n_vox)
+        state = 2 if model.parent_rows else 1  # the parent block follows the volume (model.with_parent)
         sizes = {
-            "volume": n_vox * _F4,
-            "temperature": n_vox * _F4,
+            "volume": state * n_vox * _F4,
+            "temperature": state * n_vox * _F4,
             "exemplar patches": chunks * nr * self.vw * _F4,
             "group log-sums": batch * views * self._pad(n_labels) * _F4,
             "voxel indices": batch * _F4,
@@ -145,7 +146,8 @@ class CLBackend:
         """The likelihood program for *model*; *projected*: the pruned sum's projected candidates, if any."""
         views, nr = model.offsets.shape[:2]
         return programs.build(self.device, "ml/likelihood.cl", {
-            "NR": nr, "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
+            "NR": nr, "NCHILD": nr - model.parent_rows,  # the rows after NCHILD: parent terms
+            "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
             "NS": self.params.n_similar if self.params.likelihood == "pruned" else 1,
             **({"PROJ_K": self.params.prune_projected_k, "PROJ_D": projected.axes.shape[1], "PROJ_P": projected.probe}
                if projected is not None else {}),
@@ -198,11 +200,12 @@ class CLBackend:
         return part
 
     def start_scale(self, model: ScaleModel, vol: np.ndarray, temp: np.ndarray, params: MLParams,
-                    sources: np.ndarray | None = None) -> None:
+                    sources: np.ndarray | None = None, parent: np.ndarray | None = None) -> None:
         """Upload a scale's tables and state; *sources* ``(views, voxels)``: each voxel's source
-        site per view (a resumed run's; default: none yet, -1)."""
+        site per view (a resumed run's; default: none yet, -1); *parent*: the parent block
+        (:func:`clsolid.ml.model.parent_block`) of a model with parent rows."""
         self.load_scale(model, params)
-        self.load_state(vol, temp, sources)
+        self.load_state(vol, temp, sources, parent=parent)
 
     def load_scale(self, model: ScaleModel, params: MLParams, block=None) -> None:
         """Upload a scale's tables and allocate its buffers, the state's for a *block*
@@ -222,8 +225,9 @@ class CLBackend:
         self.chunk_site = self._buf(canon[chunk_site])  # the source each lane records
         views = model.offsets.shape[0]
         mf, ctx = cl.mem_flags, self.device.context
-        self.vol_buf = cl.Buffer(ctx, mf.READ_WRITE, self.capacity * _F4)
-        self.temp_buf = cl.Buffer(ctx, mf.READ_WRITE, self.capacity * _F4)
+        state = 2 if model.parent_rows else 1  # room for the parent block after the volume
+        self.vol_buf = cl.Buffer(ctx, mf.READ_WRITE, state * self.capacity * _F4)
+        self.temp_buf = cl.Buffer(ctx, mf.READ_WRITE, state * self.capacity * _F4)
         self.src = cl.Buffer(ctx, mf.READ_WRITE, views * self.capacity * _F4)
         self.batch = batch = min(self.max_batch, self.capacity)
         if pruning is not None:
@@ -250,11 +254,12 @@ class CLBackend:
         self.start_sweep(0, 0, 1.0, np.zeros(n_labels))
 
     def load_state(self, vol: np.ndarray, temp: np.ndarray, sources: np.ndarray | None = None,
-                   origin: tuple[int, int, int] = (0, 0, 0)) -> None:
+                   origin: tuple[int, int, int] = (0, 0, 0), parent: np.ndarray | None = None) -> None:
         """Upload the state the next updates work on: the volume and temperatures of a block
         (the whole volume, or a tile with its halo whose first voxel lies at *origin* of the
         whole, see :mod:`clsolid.core.tiles`), and each voxel's sources ``(views, voxels)``
-        (default: none yet, -1). Updates take the block's flat indices."""
+        (default: none yet, -1), and the block's *parent* block where the model has parent rows
+        (:meth:`clsolid.ml.model.ScaleModel.with_parent`). Updates take the block's flat indices."""
         import pyopencl as cl
 
         q, views = self.device.queue, self.model.offsets.shape[0]
@@ -265,8 +270,10 @@ class CLBackend:
         self.placement = tuple(np.int32(v) for v in tuple(origin) + tuple(self.model.shape))
         if sources is None:
             sources = np.full((views, self.n_block), -1, np.int32)
-        cl.enqueue_copy(q, self.vol_buf, np.ascontiguousarray(vol, np.float32))
-        cl.enqueue_copy(q, self.temp_buf, np.ascontiguousarray(temp, np.float32))
+        if self.model.parent_rows and np.size(parent) != self.n_block:
+            raise ValueError(f"a model with parent terms needs the block's parent block, {self.block}")
+        cl.enqueue_copy(q, self.vol_buf, self.model.with_parent(np.asarray(vol, np.float32), parent))
+        cl.enqueue_copy(q, self.temp_buf, self.model.with_parent(np.asarray(temp, np.float32), np.zeros(self.block)))
         cl.enqueue_copy(q, self.src, np.ascontiguousarray(np.reshape(sources, (views, self.n_block)), np.int32))
         if self._vol is None or self._vol.shape != self.block:
             self._vol = np.empty(self.block, np.float32)

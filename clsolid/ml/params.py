@@ -157,6 +157,7 @@ class MLParams:
     bandwidth_factor: float | tuple[float, ...] | None = None
     bandwidth: tuple[float, ...] | None = field(default=None)
     falloff: float | None = None  # None: by the exemplar (for_exemplar); 0: uniform terms (the thesis)
+    parent_weight: float = 0.0  # each coarser-scale parent term's weight; 0: none (the thesis)
     # (a checkpoint older than the fall-off has no such key: None reaches build_scale, which takes 0, as it ran)
     relaxation: str = "gibbs"
     anneal_start: float = 1.0
@@ -223,6 +224,9 @@ class MLParams:
         if self.falloff is not None and not (_real(self.falloff) and self.falloff >= 0):
             raise InputError(f"falloff={self.falloff!r} must be a number >= 0 (the sigma, in pixels, of the "
                              "Gaussian weight of each neighbourhood term; 0 = every term alike, the thesis)")
+        if not (_real(self.parent_weight) and self.parent_weight >= 0):
+            raise InputError(f"parent_weight={self.parent_weight!r} must be a number >= 0 (the weight of each "
+                             "of the coarser scale's 3 x 3 parent terms in a neighbourhood; 0 = none, the thesis)")
         one_of("relaxation", self.relaxation, RELAXATIONS)
         if self.upsampling is None:  # 1/8 for ICM (thesis §5.3.3), 8/8 for annealing (TIP14)
             object.__setattr__(self, "upsampling", "8/8" if self.relaxation == "annealing" else "1/8")

@@ -351,7 +351,7 @@ class Pruning:
         m, p = self.model, self.params
         if not may_need_exact(p):
             return np.zeros(np.size(voxels), bool)
-        weights = np.stack([mean_square_weight(temp, wrapped_coords(voxels, m.shape, off)) for off in m.offsets])
+        weights = np.stack([mean_square_weight(temp, m.neighbour_coords(voxels, v)) for v in range(m.offsets.shape[0])])
         return needs_exact(src[:, voxels], weights, p.prune_min_weight, p.n_sample)
 
     def weights(self, src: np.ndarray, seed: int, tag: int, voxels: np.ndarray, view: int,
@@ -417,7 +417,7 @@ class ProjectedWindows:
 
     def project(self, model: ScaleModel, vol: np.ndarray, voxels: np.ndarray, view: int) -> np.ndarray:
         """``(m, dims)``: each voxel's window projected."""
-        x = vol.ravel()[wrapped_coords(voxels, model.shape, model.offsets[view])] * self.scale
+        x = vol.ravel()[model.neighbour_coords(voxels, view)] * self.scale
         return (x - self.mean) @ self.axes
 
     def searched(self, q: np.ndarray) -> np.ndarray:

@@ -34,8 +34,9 @@ def site_distances(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels:
                    view: int) -> np.ndarray:
     """``A_p`` ``(m, n)``: each voxel's weighted squared neighbourhood distance to every site
     (weighted mismatch count with ``model.mismatch``): neighbour r's term weighs
-    (1 - t_r)^2, times ``model.term_weight[r]`` with a fall-off."""
-    nb = wrapped_coords(voxels, model.shape, model.offsets[view])
+    (1 - t_r)^2, times ``model.term_weight[r]`` with a fall-off or parent terms (whose values
+    and temperatures *vol* and *temp* then hold after the block's: ``model.with_parent``)."""
+    nb = model.neighbour_coords(voxels, view)
     x = vol.ravel()[nb].astype(np.float64)
     w = 1.0 - temp.ravel()[nb].astype(np.float64)
     if model.term_weight is not None:  # the fall-off: each term times its weight
@@ -197,10 +198,11 @@ class ReferenceBackend:
         return pixels.ravel()[bounded(u, pixels.size)].astype(np.float64)
 
     def start_scale(self, model: ScaleModel, vol: np.ndarray, temp: np.ndarray, params,
-                    sources: np.ndarray | None = None) -> None:
+                    sources: np.ndarray | None = None, parent: np.ndarray | None = None) -> None:
         self.model, self.params = model, params
         self.vol = vol.astype(np.float64).copy()
         self.temp = temp.astype(np.float64).copy()
+        self.parent = None if parent is None else np.asarray(parent, np.float64)
         views, n_vox = model.offsets.shape[0], int(np.prod(model.shape))
         self.src = (np.full((views, n_vox), -1, np.int32) if sources is None
                     else np.asarray(sources, np.int32).reshape(views, n_vox).copy())
@@ -224,22 +226,25 @@ class ReferenceBackend:
         """Unnormalised per-view log LCPDFs ``(views, m, L)`` (exact, or pruned where the pruned
         mode allows); records each voxel's source, as a visit does."""
         m = self.model
+        vol = m.with_parent(self.vol, self.parent)  # the parent terms' values after the block's
+        temp = m.with_parent(self.temp, np.zeros(self.temp.shape))  # and their temperatures, 0
         exact = np.ones(voxels.size, bool)
         if self.params.likelihood == "pruned":
-            exact = self.pruning.exact(self.temp, self.src, voxels)
+            exact = self.pruning.exact(temp, self.src, voxels)
         out = np.empty((m.offsets.shape[0], voxels.size, m.labels.size))
         for v in range(m.offsets.shape[0]):
-            a = site_distances(m, self.vol, self.temp, voxels, v)
+            a = site_distances(m, vol, temp, voxels, v)
             if exact.any():
                 out[v, exact] = parzen(m, a[exact])
                 self.src[v, voxels[exact]] = self.canon[np.argmin(a[exact], axis=1)]
             if not exact.all():
-                out[v, ~exact] = self._pruned_view(v, voxels[~exact], a[~exact])
+                out[v, ~exact] = self._pruned_view(v, voxels[~exact], a[~exact], vol)
         return out
 
-    def _pruned_view(self, view: int, voxels: np.ndarray, a: np.ndarray) -> np.ndarray:
-        """The pruned sums of *voxels* in *view* from their distances *a* to every site; sets their sources."""
-        weights = self.pruning.weights(self.src, self.seed, self.tag, voxels, view, self.vol)
+    def _pruned_view(self, view: int, voxels: np.ndarray, a: np.ndarray, vol: np.ndarray) -> np.ndarray:
+        """The pruned sums of *voxels* in *view* from their distances *a* to every site (*vol*:
+        the block, with its parent's as ``model.with_parent`` makes it); sets their sources."""
+        weights = self.pruning.weights(self.src, self.seed, self.tag, voxels, view, vol)
         self.src[view, voxels] = pruned.nearest_source(self.pruning.table, a, weights)
         return parzen(self.model, a, weights)
 

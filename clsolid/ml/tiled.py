@@ -43,8 +43,9 @@ from .pruned import COHERENCE_REACH
 
 def halo_width(model: ScaleModel) -> int:
     """How far from a voxel the kernels read while updating it: the views' neighbourhoods
-    (values and temperatures) and the pruned sum's window of sources."""
-    return max(int(np.abs(model.union_offsets).max()), COHERENCE_REACH)
+    (values and temperatures; parent terms, read from the parent block, as far) and the pruned
+    sum's window of sources."""
+    return max(int(np.abs(model.offsets).max()), COHERENCE_REACH)
 
 
 def scale_tiling(model: ScaleModel, edge: int) -> Tiling:
@@ -106,6 +107,7 @@ class TileJob:
     origin: tuple[int, int, int]
     voxels: np.ndarray
     score_rows: np.ndarray
+    parent: np.ndarray | None = None  # the tile's parent block, halo included (parent terms only)
 
 
 @dataclass
@@ -127,7 +129,7 @@ def run_tile(engine: Any, job: TileJob) -> TileResult:
     holding the scale's tables and the sweep's arguments)."""
     before = engine.exact_visits, engine.pruned_visits, engine.search_seconds
     if job.volume is not None:
-        engine.load_state(job.volume, job.temperature, job.sources, job.origin)
+        engine.load_state(job.volume, job.temperature, job.sources, job.origin, job.parent)
     engine.update(job.voxels)
     values, temperatures, sources = engine.read_voxels(job.voxels)
     return TileResult(values, temperatures, sources, engine.read_scores(job.score_rows),
@@ -201,14 +203,15 @@ class TiledBackend:
         return self.runner.init_volume(shape, seed, pixels, self.scratch.empty(shape, np.float32))
 
     def start_scale(self, model: ScaleModel, vol: np.ndarray, temp: np.ndarray, params: MLParams,
-                    sources: np.ndarray | None = None) -> None:
-        """Upload a scale's tables, and keep its state on the host; *sources* as for
-        :meth:`clsolid.ml.opencl.CLBackend.start_scale`."""
+                    sources: np.ndarray | None = None, parent: np.ndarray | None = None) -> None:
+        """Upload a scale's tables, and keep its state on the host; *sources* and *parent* as
+        for :meth:`clsolid.ml.opencl.CLBackend.start_scale` (each tile gets its part of it)."""
         for old in (getattr(self, name, None) for name in ("_vol", "_temp", "_src")):
             self.scratch.free(old)  # the last scale's state (its volume is the start's, made already)
         self.tiling = scale_tiling(model, self.tile)
         self.runner.load_scale(model, params, self.tiling.largest_block)
         self._held = None  # the start of the tile whose current state the runner's engine holds
+        self._parent = parent  # read only: each tile's part is gathered with its state
         views = model.offsets.shape[0]
         # the driver's own start, not copied (host memory): float32 on this back end's scratch
         self._vol = vol if vol.dtype == np.float32 else self.scratch.copy(vol, np.float32)
@@ -230,7 +233,8 @@ class TiledBackend:
         held = self._held
         jobs = (TileJob(None, None, None, tile.origin, tile.local(part), rows) if i == 0 and tile.start == held
                 else TileJob(gather(self._vol, tile), gather(self._temp, tile), gather(self._src, tile), tile.origin,
-                             tile.local(part), rows) for i, (tile, part, rows) in enumerate(groups))
+                             tile.local(part), rows, None if self._parent is None else gather(self._parent, tile))
+                for i, (tile, part, rows) in enumerate(groups))
         if groups and getattr(self.runner, "keeps_state", False):
             self._held = groups[-1][0].start
         src = self.sources()

@@ -78,6 +78,14 @@ inline float hsum(floatv v)
     return c.x + c.y;
 }
 
+/* Rows NCHILD.. of a neighbourhood (parent_weight > 0: the coarser scale's 3 x 3) are read from
+ * the parent block, which follows the Z x Y x X block in the volume buffer (its temperatures,
+ * zeros, in the temperature buffer); without them NCHILD is NR. */
+#ifndef NCHILD
+#define NCHILD NR
+#endif
+#define PARENT(r, Z, Y, X) ((r) >= NCHILD ? (Z) * (Y) * (X) : 0)
+
 inline int wrap(int i, int n)
 {
     int r = i % n;
@@ -178,7 +186,7 @@ __kernel void parzen_groups(__global const float *vol, __global const float *tem
         int voxel = voxels[item / n_views];
         __global const int *off = offsets + (item % n_views) * NR * 3;
         for (int r = 0; r < NR; ++r) {
-            int j = neighbour(voxel, Y, X, Z, off + 3 * r);
+            int j = neighbour(voxel, Y, X, Z, off + 3 * r) + PARENT(r, Z, Y, X);
             PAIR(vol[j], TERM_WEIGHT(1.0f - temp[j], r), xw[b][r], w[b][r])
         }
     }
@@ -349,7 +357,7 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
     float *xws = (float *)xw, *ws = (float *)w;
     __global const int *off = offsets + view * NR * 3;
     for (int r = 0; r < NR; ++r) {
-        int j = shifted(z, y, x, Z, Y, X, off + 3 * r);
+        int j = shifted(z, y, x, Z, Y, X, off + 3 * r) + PARENT(r, Z, Y, X);
         PAIR(vol[j], TERM_WEIGHT(1.0f - temp[j], r), xws[r], ws[r])
     }
     floatv gmaxv[NGV], gsumv[NGV];   /* a group at a time below, a vector at a time at the end */
@@ -476,7 +484,7 @@ __kernel void projected_nearest(__global const float *vol, int Z, int Y, int X,
     for (int d = 0; d < PDV; ++d) q[d] = (float8)(0.0f);
     __global const int *off = offsets + view * NR * 3;
     for (int r = 0; r < NR; ++r) {
-        float v = vol[shifted(z, y, x, Z, Y, X, off + 3 * r)] * proj_scale[r] - proj_mean[r];
+        float v = vol[shifted(z, y, x, Z, Y, X, off + 3 * r) + PARENT(r, Z, Y, X)] * proj_scale[r] - proj_mean[r];
         for (int d = 0; d < PDV; ++d) q[d] += v * proj_axes[r * PDV + d];
     }
     float lbest[PROJ_P];   /* the lists to search */
@@ -516,7 +524,7 @@ __kernel void prune_flags(__global const float *temp, int Z, int Y, int X,
     for (int v = 0; v < n_views; ++v) {
         float total = 0.0f;
         for (int r = 0; r < NR; ++r) {
-            float wr = 1.0f - temp[shifted(z, y, x, Z, Y, X, offsets + (v * NR + r) * 3)];
+            float wr = 1.0f - temp[shifted(z, y, x, Z, Y, X, offsets + (v * NR + r) * 3) + PARENT(r, Z, Y, X)];
             total += wr * wr;
         }
         if ((need_source && src[v * n_vox + voxel] < 0) || total < min_weight * NR) flag = 1;
