@@ -11,7 +11,9 @@ site's centre value and y_{p,r} its neighbour r. The constant 1/(n h^d) cancels 
 every heuristic and is dropped. With ``distance="mismatch"`` every squared difference
 (a - b)^2 above is [a != b] instead, with ``"weighted"`` [a != b] (c_a + c_b)
 (:func:`difference`, :func:`phase_costs`), and the bandwidth is taken in those units
-(:func:`phase_sigma`).
+(:func:`phase_sigma`). A fall-off weighs each term (:func:`falloff_weights`); with
+``parent_weight`` > 0 the sum over r also runs over the coarser scale's 3 x 3 around the
+parent, at t = 0, each term times that weight (:func:`parent_tables`, :func:`parent_block`).
 """
 
 from __future__ import annotations

@@ -346,8 +346,9 @@ class Pruning:
                           if params.prune_projected else None)
 
     def exact(self, temp: np.ndarray, src: np.ndarray, voxels: np.ndarray) -> np.ndarray:
-        """``(m,)`` bool: which *voxels* get the exact sum, given the temperatures and the
-        sources ``(views, voxels)`` (:func:`needs_exact`)."""
+        """``(m,)`` bool: which *voxels* get the exact sum, given the temperatures (with the
+        parent terms' zeros after them, ``ScaleModel.with_parent``) and the sources ``(views,
+        voxels)`` (:func:`needs_exact`)."""
         m, p = self.model, self.params
         if not may_need_exact(p):
             return np.zeros(np.size(voxels), bool)
