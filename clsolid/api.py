@@ -37,7 +37,7 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
                "prune_similar", "prune_sample", "prune_min_weight", "prune_projected",
                "prune_projected_k", "prune_projected_probe", "prune_projected_sweeps", "falloff", "parent_weight",
-               "region")
+               "parent_min_side", "region")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client", "scratch")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
 _RUN_OPTIONS = ("checkpoint", "checkpoint_every")
@@ -274,8 +274,10 @@ def synthesize(
         scale, of a Gaussian weight on each neighbourhood term by its distance from the
         centre; default 3 for grey exemplars, 0 for categorical ones; 0 = every term alike,
         the thesis: README Choices), ``parent_weight`` (each of the coarser scale's 3 x 3
-        parent terms, added to every neighbourhood below the coarsest scale, weighs this
-        against 1 for a term of the window; default 0, none, the thesis: README Choices),
+        parent terms, added to every neighbourhood of the scales whose coarser exemplar is
+        at least ``parent_min_side`` pixels on its shorter side (default 64), weighs this
+        against 1 for a term of the window; default 4 for categorical exemplars, 0 for grey
+        ones; 0 = none, the thesis: README Choices),
         ``builtin_size``, and OpenCL tuning: ``vector_width``,
         ``voxels_per_item``, ``local_size``, ``max_batch``.
 

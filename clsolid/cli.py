@@ -73,7 +73,11 @@ def _add_synth(sub) -> None:
                    help="wl: match the k x k square alone, without the coarser scale's 3 x 3")
     p.add_argument("--parent-weight", type=float, default=None,
                    help="each of the coarser scale's 3 x 3 parent terms' weight in the distance against 1 for "
-                        "the square's (default: 4 for kopf, 1 for wl and chen-wang; ml: 0, none, the thesis)")
+                        "the square's (default: 4 for kopf, 1 for wl and chen-wang; ml: 4 on segmented "
+                        "exemplars, 0 on grey ones; 0 = none, the thesis)")
+    p.add_argument("--parent-min-side", type=int, default=d.parent_min_side, metavar="N",
+                   help="ml: parent terms only at scales whose coarser exemplar is at least N pixels on its "
+                        "shorter side (default %(default)s; 0: every scale below the coarsest)")
     p.add_argument("--init", choices=("upsample", "noise"), default="upsample",
                    help="wl: a finer scale starts from the coarser result up-sampled (default) or from noise")
     p.add_argument("--rule", choices=RULES, default="centres",
@@ -336,7 +340,8 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
             "prune_similar", "prune_sample", "prune_min_weight", "prune_projected", "prune_projected_k",
-            "prune_projected_probe", "prune_projected_sweeps", "falloff", "region", "tile", "scratch", "scheduler",
+            "prune_projected_probe", "prune_projected_sweeps", "falloff", "parent_min_side", "region", "tile", "scratch",
+            "scheduler",
             "workers", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram",
             "candidates", "specify", "search", "exact_passes", "site_map", "source_map")
@@ -408,7 +413,7 @@ def _ml_options(args) -> dict:
                    prune_min_weight=args.prune_min_weight, prune_projected=args.prune_projected,
                    prune_projected_k=args.prune_projected_k, prune_projected_probe=args.prune_projected_probe,
                    prune_projected_sweeps=args.prune_projected_sweeps,
-                   falloff=args.falloff, region=args.region)
+                   falloff=args.falloff, parent_min_side=args.parent_min_side, region=args.region)
     if args.parent_weight is not None:
         options["parent_weight"] = args.parent_weight
     if args.tile is not None:

@@ -26,7 +26,7 @@ def _parent_state(model, seed):
 def test_parent_rows_read_the_coarser_scale_around_the_parent(small_labels):
     """Row d of a voxel's parent square is the coarser volume at (its position // 2) + d, on
     the torus; of a site's, the coarser exemplar at (its centre // 2) + d."""
-    params = MLParams(neighborhood=5, scales=2, parent_weight=2.0)
+    params = MLParams(neighborhood=5, scales=2, parent_weight=2.0, parent_min_side=0)
     model = build_scale(small_labels, SHAPE, params, 0)
     plain = build_scale(small_labels, SHAPE, MLParams(neighborhood=5, scales=2), 0)
     assert model.parent_rows == 9 and model.offsets.shape[1] == plain.offsets.shape[1] + 9
@@ -61,7 +61,7 @@ def test_parent_terms_add_their_weighted_distance(small_labels, distance, fallof
     """The distance with parent terms is the window's plus parent_weight times the parent
     square's, at t = 0 (the parent block is trusted)."""
     kw = dict(neighborhood=5, scales=2, distance=distance, falloff=falloff)
-    model = build_scale(small_labels, SHAPE, MLParams(parent_weight=3.0, **kw), 0)
+    model = build_scale(small_labels, SHAPE, MLParams(parent_weight=3.0, parent_min_side=0, **kw), 0)
     plain = build_scale(small_labels, SHAPE, MLParams(**kw), 0)
     vol, temp, _, parent = _parent_state(model, 5)
     voxels = np.arange(0, vol.size, 4)
@@ -87,7 +87,7 @@ def test_parent_terms_add_their_weighted_distance(small_labels, distance, fallof
     dict(distance="squared", likelihood="pruned", prune_similar=4, prune_sample=0, prune_projected=8,
          prune_projected_k=20)])
 def test_kernels_match_the_reference_with_parent_terms(device, small_labels, kw):
-    params = MLParams(**{"neighborhood": 5, "scales": 2, "parent_weight": 4.0, **kw})
+    params = MLParams(**{"neighborhood": 5, "scales": 2, "parent_weight": 4.0, "parent_min_side": 0, **kw})
     model = build_scale(small_labels, SHAPE, params, 0)
     vol, temp, _, parent = _parent_state(model, 7)
     rng = np.random.default_rng(1)
@@ -107,7 +107,7 @@ def test_kernels_match_the_reference_with_parent_terms(device, small_labels, kw)
 
 
 def test_a_model_with_parent_terms_refuses_a_state_without_its_parent(device, small_labels):
-    params = MLParams(neighborhood=5, scales=2, parent_weight=4.0)
+    params = MLParams(neighborhood=5, scales=2, parent_weight=4.0, parent_min_side=0)
     model = build_scale(small_labels, SHAPE, params, 0)
     vol, temp = random_state(model)
     with pytest.raises(ValueError, match="parent block"):
@@ -121,7 +121,7 @@ def test_bad_parent_weight_is_refused(bad):
 
 
 def test_runs_with_parent_terms_are_reproducible_and_tiles_change_nothing(tmp_path, device, small_labels):
-    kw = dict(neighborhood=5, scales=2, parent_weight=4.0, rng=3, device=device, output="labels")
+    kw = dict(neighborhood=5, scales=2, parent_weight=4.0, parent_min_side=0, rng=3, device=device, output="labels")
     a = clsolid.synthesize(small_labels, (12, 12, 12), **kw)
     np.testing.assert_array_equal(a, clsolid.synthesize(small_labels, (12, 12, 12), **kw))
     np.testing.assert_array_equal(a, clsolid.synthesize(small_labels, (12, 12, 12), tile=8, **kw))
@@ -133,7 +133,7 @@ def test_runs_with_parent_terms_are_reproducible_and_tiles_change_nothing(tmp_pa
 def test_a_run_with_parent_terms_resumes_identically_midway_through_a_finer_scale(tmp_path, device):
     """The checkpoint keeps the scale's parent block: a run stopped after a sweep of the finest
     scale (whose parent is the coarser result) goes on to the uninterrupted run's volume."""
-    kw = dict(neighborhood=5, scales=2, rng=4, parent_weight=4.0, device=device)
+    kw = dict(neighborhood=5, scales=2, rng=4, parent_weight=4.0, parent_min_side=0, device=device)
     whole = clsolid.synthesize("gravel", (12, 12, 12), full_output=True, **kw)
     after = len(whole.timings["scales"][0]["temperatures"]) + 1  # the finest scale's first sweep
     seen = []
@@ -158,14 +158,15 @@ def test_cli_gives_ml_its_parent_weight_and_the_sidecar_records_it(tmp_path, dev
 
     out = tmp_path / "v.npy"
     assert main(["synth", "brick", "-o", str(out), "--shape", "8", "10", "12", "--neighborhood", "3",
-                 "--scales", "2", "--levels", "8", "--seed", "3", "--parent-weight", "4", "--quiet",
+                 "--scales", "2", "--levels", "8", "--seed", "3", "--parent-weight", "4", "--parent-min-side", "0",
+                 "--quiet",
                  "--device", device.device.name.strip()[:8]]) == 0
     assert json.loads((tmp_path / "v.json").read_text())["params"]["parent_weight"] == 4.0
     plain = tmp_path / "p.npy"
     assert main(["synth", "brick", "-o", str(plain), "--shape", "8", "10", "12", "--neighborhood", "3",
                  "--scales", "2", "--levels", "8", "--seed", "3", "--quiet",
                  "--device", device.device.name.strip()[:8]]) == 0
-    assert json.loads((tmp_path / "p.json").read_text())["params"]["parent_weight"] == 0.0
+    assert json.loads((tmp_path / "p.json").read_text())["params"]["parent_weight"] == 0.0  # grey brick: none
     assert not np.array_equal(np.load(out), np.load(plain))
 
 
@@ -173,6 +174,24 @@ def test_the_reference_back_end_runs_with_parent_terms(small_labels):
     """The float64 reference takes the parent block as the kernels do (its sums are compared
     above); a whole run on it differs from one without parent terms."""
     kw = dict(neighborhood=3, scales=2, max_sweeps=2, rng=2, device="reference", output="labels")
-    a = clsolid.synthesize(small_labels, (6, 6, 6), parent_weight=4.0, **kw)
+    a = clsolid.synthesize(small_labels, (6, 6, 6), parent_weight=4.0, parent_min_side=0, **kw)
     assert set(np.unique(a)) <= set(np.unique(small_labels))
     assert (a != clsolid.synthesize(small_labels, (6, 6, 6), **kw)).any()
+
+
+@pytest.mark.parametrize("name, weight", [("composite3", 4.0), ("fibres", 4.0), ("gravel", 0.0), ("brick", 0.0)])
+def test_parent_terms_by_the_exemplar_where_the_coarser_one_is_wide_enough(name, weight):
+    """parent_weight=None: 4 on categorical exemplars, 0 on grey ones; and only at the scales
+    whose coarser exemplar is at least parent_min_side (64) wide: at 128^2 the finest scale's,
+    at 64^2 none (so the 64^2 gallery's volumes are what they were)."""
+    from clsolid.exemplar import level_map
+    from clsolid.gallery import gallery_exemplar
+
+    for size, with_parents in ((128, [True, False, False]), (64, [False, False, False])):
+        levels = level_map(gallery_exemplar(name, size), MLParams().levels)
+        params = MLParams().for_exemplar(levels.values.size, levels.exact, 0.0, levels.labels.shape)
+        assert params.parent_weight == weight
+        got = [build_scale(levels.labels, (64, 64, 64), params, lv).parent_rows > 0 for lv in range(3)]
+        assert got == [w and weight > 0 for w in with_parents]
+    assert MLParams(parent_weight=4.0).for_exemplar(4, False).parent_weight == 4.0  # given: kept
+    assert MLParams.from_dict({"neighborhood": 11}).parent_weight == 0.0  # a record from before: none

@@ -64,6 +64,15 @@ DEFAULT_BANDWIDTH_FACTOR = 0.2
 # (4 of 6 seeds within 0.3 either way); on categorical ones it moved nothing to the better
 # (fibres' autocorrelation 0.13 -> 0.32, copies up), so they keep 0 (README, Choices).
 GREY_FALLOFF = 3.0
+# The coarser scale's 3 x 3 parent terms (parent_weight=None: by the exemplar). On categorical
+# exemplars each weighs 4 against 1 for a window term, at the scales whose coarser exemplar has
+# at least PARENT_MIN_SIDE pixels on its shorter side: at 128^2 -> 64^3 (ten categorical gallery
+# exemplars, seeds 1-4) autocorrelation met in 30 of 36 runs against 22, C2 in 26 against 18,
+# copies 25 of 40 against 21, the mirror 32 against 33; from a 32^2 or 16^2 coarser scale (the
+# 64^2 gallery) they cost (autocorrelation 11 of 16 against 15), and grey exemplars lost at
+# 128^2 (autocorrelation 1 of 10 runs against 4), so those keep 0 (README, Choices).
+CATEGORICAL_PARENT_WEIGHT = 4.0
+PARENT_MIN_SIDE = 64
 
 #: How a visited voxel takes its new label (thesis_spec §2.3). "icm" takes the argmax (the
 #: thesis); "gibbs" draws it from the combined, normalised LCPDF, with ICM's per-voxel
@@ -157,7 +166,8 @@ class MLParams:
     bandwidth_factor: float | tuple[float, ...] | None = None
     bandwidth: tuple[float, ...] | None = field(default=None)
     falloff: float | None = None  # None: by the exemplar (for_exemplar); 0: uniform terms (the thesis)
-    parent_weight: float = 0.0  # each coarser-scale parent term's weight; 0: none (the thesis)
+    parent_weight: float | None = None  # each parent term's weight; None: by the exemplar; 0: none (the thesis)
+    parent_min_side: int = PARENT_MIN_SIDE  # parent terms where the coarser exemplar is at least this wide
     # (a checkpoint older than the fall-off has no such key: None reaches build_scale, which takes 0, as it ran)
     relaxation: str = "gibbs"
     anneal_start: float = 1.0
@@ -224,9 +234,10 @@ class MLParams:
         if self.falloff is not None and not (_real(self.falloff) and self.falloff >= 0):
             raise InputError(f"falloff={self.falloff!r} must be a number >= 0 (the sigma, in pixels, of the "
                              "Gaussian weight of each neighbourhood term; 0 = every term alike, the thesis)")
-        if not (_real(self.parent_weight) and self.parent_weight >= 0):
+        if self.parent_weight is not None and not (_real(self.parent_weight) and self.parent_weight >= 0):
             raise InputError(f"parent_weight={self.parent_weight!r} must be a number >= 0 (the weight of each "
                              "of the coarser scale's 3 x 3 parent terms in a neighbourhood; 0 = none, the thesis)")
+        int_in("parent_min_side", self.parent_min_side, 0)
         one_of("relaxation", self.relaxation, RELAXATIONS)
         if self.upsampling is None:  # 1/8 for ICM (thesis §5.3.3), 8/8 for annealing (TIP14)
             object.__setattr__(self, "upsampling", "8/8" if self.relaxation == "annealing" else "1/8")
@@ -274,7 +285,8 @@ class MLParams:
     def for_exemplar(self, n_levels: int, categorical: bool, seam_ratio: float = 0.0,
                      shape: tuple[int, int] | None = None) -> "MLParams":
         """These parameters with ``likelihood="auto"``, ``distance="auto"``,
-        ``insert_spacing=None``, ``falloff=None``, ``seam_gap=None``, ``prune_projected=None``,
+        ``insert_spacing=None``, ``falloff=None``, ``seam_gap=None``, ``parent_weight=None``,
+        ``prune_projected=None``,
         ``prune_similar=None`` and ``prune_sample=None`` resolved for an exemplar of *n_levels*
         levels, *categorical* if they are its own values (not a quantisation of grey ones),
         whose :func:`~clsolid.core.slices.seam_ratio` is *seam_ratio*, of *shape* (rows,
@@ -300,8 +312,12 @@ class MLParams:
         gap = self.seam_gap
         if gap is None:
             gap = SEAM_GAP if seam_ratio > SEAM_SHOWS else 0
+        parents = self.parent_weight
+        if parents is None:
+            parents = CATEGORICAL_PARENT_WEIGHT if phases else 0.0
         resolved = replace(self, likelihood=likelihood, distance=distance, insert_spacing=spacing,
-                           falloff=float(falloff), seam_gap=gap, prune_projected=projected)
+                           falloff=float(falloff), seam_gap=gap, prune_projected=projected,
+                           parent_weight=float(parents))
         return replace(resolved, prune_similar=resolved.n_similar, prune_sample=resolved.n_sample)
 
     def _by_projection(self, value: int | None, projected: int, default: int) -> int:
@@ -335,6 +351,7 @@ class MLParams:
         """The parameters recorded by :meth:`to_dict` (e.g. ``SynthesisResult.params``, a checkpoint's);
         other keys are ignored. Keys a record predates take the value it ran with, not today's default."""
         kept = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
+        kept.setdefault("parent_weight", 0.0)  # before parent terms there were none
         if kept.get("prune_projected"):
             kept = {**_PROJECTED_AS_IT_RAN, **kept}
         return cls(**kept)
