@@ -189,11 +189,13 @@ def test_cli_passes_the_parent_weight_and_the_distance(tmp_path, device, method,
     assert (params["parent_weight"], params["distance"]) == want
 
 
-def test_cli_refuses_the_parent_weight_for_ml(tmp_path, capsys):
+def test_cli_refuses_mls_parent_min_side_for_kopf(tmp_path, capsys):
+    """--parent-weight is every method's (ml's since its parent terms); --parent-min-side is ml's."""
     from clsolid.cli import main
 
-    assert main(["synth", "brick", "-o", str(tmp_path / "m.npy"), "--parent-weight", "2", "-q"]) == 2
-    assert "--parent-weight not used by --method ml" in capsys.readouterr().err
+    assert main(["synth", "brick", "-o", str(tmp_path / "m.npy"), "--method", "kopf", "--parent-min-side", "0",
+                 "-q"]) == 2
+    assert "--parent-min-side not used by --method kopf" in capsys.readouterr().err
 
 
 # --------------------------------------------------------------------------- position histogram
