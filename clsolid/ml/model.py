@@ -313,9 +313,11 @@ def build_scale(
     sshape = scale_shape(shape, level)
     weight = falloff_weights(offsets[0], params.falloff or 0.0)  # every view's rows pair alike
     parents = 0
-    coarse = scale_exemplar(labels_img, level + 1, params.pyramid, phases=mismatch) if params.parent_weight else None
-    # the coarsest scale has no parent; a small coarser exemplar's result is not to be trusted (PARENT_MIN_SIDE)
-    if coarse is not None and level < params.scales - 1 and min(coarse.shape) >= params.parent_min_side:
+    coarse = None
+    if params.parent_weight and level < params.scales - 1:  # the coarsest scale has no parent
+        coarse = scale_exemplar(labels_img, level + 1, params.pyramid, phases=mismatch)
+    # a small coarser exemplar's result is not to be trusted (params.PARENT_MIN_SIDE)
+    if coarse is not None and min(coarse.shape) >= params.parent_min_side:
         patches = np.concatenate([patches, parent_tables(coarse, ex.shape, half)])
         offsets = np.concatenate([offsets, np.stack([parent_offsets(v) for v in params.view_names])], axis=1)
         weight = np.concatenate([np.ones(offsets.shape[1] - 9) if weight is None else weight,
