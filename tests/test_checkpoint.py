@@ -56,6 +56,18 @@ def test_every_relaxation_resumes_identically(tmp_path, device, relaxation):
     np.testing.assert_array_equal(clsolid.resume(folder, device=device), whole)
 
 
+def test_a_run_with_parent_terms_resumes_identically_midway_through_a_finer_scale(tmp_path, device):
+    """The checkpoint keeps the scale's parent block (the coarser result repeated): a run
+    stopped after the finest scale's first sweep goes on to the uninterrupted run's volume."""
+    kw = dict(parent_weight=4.0, parent_min_side=0)
+    whole = clsolid.synthesize("gravel", SHAPE, device=device, full_output=True, **KW, **kw)
+    folder = _interrupted(tmp_path, device, len(whole.timings["scales"][0]["temperatures"]) + 1, **kw)
+    arrays = read_checkpoint(folder)[1]
+    scale, _, done = arrays["position"]
+    assert scale == 1 and not done and arrays["parent"].shape == SHAPE  # midway, the parent kept
+    np.testing.assert_array_equal(clsolid.resume(folder, device=device), whole.volume)
+
+
 def test_reference_back_end_resumes_identically(tmp_path):
     kw = dict(KW, scales=1, max_sweeps=3)
     whole = clsolid.synthesize("gravel", (6, 6, 6), device="reference", **kw)

@@ -6,7 +6,6 @@ import pytest
 from conftest import random_state
 
 import clsolid
-from clsolid.core.checkpoint import read_checkpoint
 from clsolid.errors import InputError
 from clsolid.ml.model import build_scale, parent_block, scale_exemplar, wrapped_coords
 from clsolid.ml.opencl import CLBackend
@@ -128,27 +127,6 @@ def test_runs_with_parent_terms_are_reproducible_and_tiles_change_nothing(tmp_pa
     np.testing.assert_array_equal(a, clsolid.synthesize(small_labels, (12, 12, 12), tile=8, scratch=tmp_path, **kw))
     plain = clsolid.synthesize(small_labels, (12, 12, 12), **{**kw, "parent_weight": 0})
     assert (a != plain).mean() > 0.1
-
-
-def test_a_run_with_parent_terms_resumes_identically_midway_through_a_finer_scale(tmp_path, device):
-    """The checkpoint keeps the scale's parent block: a run stopped after a sweep of the finest
-    scale (whose parent is the coarser result) goes on to the uninterrupted run's volume."""
-    kw = dict(neighborhood=5, scales=2, rng=4, parent_weight=4.0, parent_min_side=0, device=device)
-    whole = clsolid.synthesize("gravel", (12, 12, 12), full_output=True, **kw)
-    after = len(whole.timings["scales"][0]["temperatures"]) + 1  # the finest scale's first sweep
-    seen = []
-
-    def stop(info):
-        seen.append(info.scale)
-        if len(seen) == after:
-            raise KeyboardInterrupt
-
-    with pytest.raises(KeyboardInterrupt):
-        clsolid.synthesize("gravel", (12, 12, 12), checkpoint=tmp_path / "ck", progress=stop, **kw)
-    assert seen[-1] == 2
-    _, arrays = read_checkpoint(tmp_path / "ck")
-    assert not arrays["position"][2] and arrays["parent"].shape == (12, 12, 12)  # midway, the parent kept
-    np.testing.assert_array_equal(clsolid.resume(tmp_path / "ck", device=device), whole.volume)
 
 
 def test_cli_gives_ml_its_parent_weight_and_the_sidecar_records_it(tmp_path, device):

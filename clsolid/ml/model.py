@@ -61,11 +61,7 @@ def parent_offsets(view: str) -> np.ndarray:
     """``(9, 3)`` offsets of a voxel's parent square in *view*: the coarser scale's 3 x 3 around
     its parent, row-major, read from the parent block (:func:`parent_block`), where the coarser
     voxel s // 2 + d lies at s + 2 d."""
-    row_axis, col_axis = VIEW_AXES[view]
-    out = np.zeros((9, 3), np.int32)
-    for i, (dr, dc) in enumerate((dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1)):
-        out[i, row_axis], out[i, col_axis] = 2 * dr, 2 * dc
-    return out
+    return 2 * np.insert(view_offsets(view, 1), 4, 0, axis=0)  # the 3 x 3 window, its centre put back
 
 
 def parent_block(coarse: np.ndarray, shape: tuple[int, int, int], out: np.ndarray | None = None) -> np.ndarray:
@@ -252,6 +248,11 @@ class ScaleModel:
             flat[:, -self.parent_rows:] += int(np.prod(self.shape))
         return flat
 
+    @property
+    def state_blocks(self) -> int:
+        """How many blocks a state buffer holds: the block's, then its parent's (:meth:`with_parent`)."""
+        return 2 if self.parent_rows else 1
+
     def with_parent(self, values: np.ndarray, parent: np.ndarray | None) -> np.ndarray:
         """*values* (a volume or its temperatures), flat, followed by the *parent* block's
         (:func:`parent_block`; for temperatures zeros: the parent terms are trusted) where the
@@ -318,11 +319,12 @@ def build_scale(
         coarse = scale_exemplar(labels_img, level + 1, params.pyramid, phases=mismatch)
     # a small coarser exemplar's result is not to be trusted (params.PARENT_MIN_SIDE)
     if coarse is not None and min(coarse.shape) >= params.parent_min_side:
-        patches = np.concatenate([patches, parent_tables(coarse, ex.shape, half)])
+        square = parent_tables(coarse, ex.shape, half)
+        parents = square.shape[0]
+        weight = np.concatenate([np.ones(offsets.shape[1]) if weight is None else weight,
+                                 np.full(parents, float(params.parent_weight))])
+        patches = np.concatenate([patches, square])
         offsets = np.concatenate([offsets, np.stack([parent_offsets(v) for v in params.view_names])], axis=1)
-        weight = np.concatenate([np.ones(offsets.shape[1] - 9) if weight is None else weight,
-                                 np.full(9, float(params.parent_weight))])
-        parents = 9
     return ScaleModel(
         level=level,
         shape=sshape,

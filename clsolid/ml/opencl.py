@@ -102,10 +102,9 @@ class CLBackend:
         views, nr = model.offsets.shape[:2]
         chunks = int(np.sum(-(-np.bincount(np.unique(model.centres, return_inverse=True)[1]) // self.vw)))
         batch = min(self.max_batch, n_vox)
-        state = 2 if model.parent_rows else 1  # the parent block follows the volume (model.with_parent)
         sizes = {
-            "volume": state * n_vox * _F4,
-            "temperature": state * n_vox * _F4,
+            "volume": model.state_blocks * n_vox * _F4,
+            "temperature": model.state_blocks * n_vox * _F4,
             "exemplar patches": chunks * nr * self.vw * _F4,
             "group log-sums": batch * views * self._pad(n_labels) * _F4,
             "voxel indices": batch * _F4,
@@ -225,9 +224,8 @@ class CLBackend:
         self.chunk_site = self._buf(canon[chunk_site])  # the source each lane records
         views = model.offsets.shape[0]
         mf, ctx = cl.mem_flags, self.device.context
-        state = 2 if model.parent_rows else 1  # room for the parent block after the volume
-        self.vol_buf = cl.Buffer(ctx, mf.READ_WRITE, state * self.capacity * _F4)
-        self.temp_buf = cl.Buffer(ctx, mf.READ_WRITE, state * self.capacity * _F4)
+        self.vol_buf = cl.Buffer(ctx, mf.READ_WRITE, model.state_blocks * self.capacity * _F4)
+        self.temp_buf = cl.Buffer(ctx, mf.READ_WRITE, model.state_blocks * self.capacity * _F4)
         self.src = cl.Buffer(ctx, mf.READ_WRITE, views * self.capacity * _F4)
         self.batch = batch = min(self.max_batch, self.capacity)
         if pruning is not None:
@@ -270,10 +268,13 @@ class CLBackend:
         self.placement = tuple(np.int32(v) for v in tuple(origin) + tuple(self.model.shape))
         if sources is None:
             sources = np.full((views, self.n_block), -1, np.int32)
-        if self.model.parent_rows and np.size(parent) != self.n_block:
-            raise ValueError(f"a model with parent terms needs the block's parent block, {self.block}")
-        cl.enqueue_copy(q, self.vol_buf, self.model.with_parent(np.asarray(vol, np.float32), parent))
-        cl.enqueue_copy(q, self.temp_buf, self.model.with_parent(np.asarray(temp, np.float32), np.zeros(self.block)))
+        cl.enqueue_copy(q, self.vol_buf, np.ascontiguousarray(vol, np.float32))
+        cl.enqueue_copy(q, self.temp_buf, np.ascontiguousarray(temp, np.float32))
+        if self.model.parent_rows:  # the parent block after the block, its temperatures 0 (model.with_parent)
+            if np.size(parent) != self.n_block:
+                raise ValueError(f"a model with parent terms needs the block's parent block, {self.block}")
+            cl.enqueue_copy(q, self.vol_buf, np.ascontiguousarray(parent, np.float32), dst_offset=self.n_block * _F4)
+            cl.enqueue_fill_buffer(q, self.temp_buf, np.float32(0), self.n_block * _F4, self.n_block * _F4)
         cl.enqueue_copy(q, self.src, np.ascontiguousarray(np.reshape(sources, (views, self.n_block)), np.int32))
         if self._vol is None or self._vol.shape != self.block:
             self._vol = np.empty(self.block, np.float32)
