@@ -155,16 +155,16 @@ def test_gallery_counts_targets_seed_by_seed(tool):
     from those worst cells and from each seed's own runs."""
     gallery = tool("gallery")
 
-    def run(mirror, patch):
+    def run(mirror, patch, seed):
         scores = {v: {key: None for key, _ in gallery.SCORES} for v in gallery.VIEWS}
         for v in gallery.VIEWS:
             scores[v]["patch_sw"] = patch
         return {"phase_error_pp": 0.5, "scores": scores, "mirror_max": mirror, "mirror_chance": 0.05,
                 "copy": {"fraction": 0.5, "view": "front", "index": 3, "inserted": False, "chance": 0.4},
-                "seconds": 1.0, "constrained": ["front", "right"]}
+                "seconds": 1.0, "constrained": ["front", "right"], "seed": seed}
 
-    runs = {"porous80": [run(0.05, 0.1), run(0.2, 0.1)],   # the mirror missed on seed 2 only
-            "inclusions": [run(0.15, 0.1), run(0.05, 0.5)]}  # the mirror on seed 1, patches on seed 2
+    runs = {"porous80": [run(0.05, 0.1, 1), run(0.2, 0.1, 2)],   # the mirror missed on seed 2 only
+            "inclusions": [run(0.15, 0.1, 1), run(0.05, 0.5, 2)]}  # the mirror on seed 1, patches on seed 2
     rows = {name: gallery.summarise(r) for name, r in runs.items()}
     settings = {"method": "ml", "size": 64, "shape": 48, "seeds": [1, 2], "options": {}, "device": "x"}
     table = gallery.markdown(rows, settings, runs)
@@ -176,16 +176,17 @@ def test_gallery_counts_targets_seed_by_seed(tool):
 
 def test_gallery_merges_runs_split_by_exemplar(tool, tmp_path, capsys):
     """--merge: the table of two runs over different exemplars is the table of one run over
-    both; runs with other settings, or measuring an exemplar twice, are refused."""
+    both, and so for two runs over different seeds; runs with other settings, or measuring an
+    exemplar with one seed twice, are refused."""
     import json
 
     gallery = tool("gallery")
 
-    def run(mirror):
+    def run(mirror, seed=1):
         scores = {v: {key: 0.1 for key, _ in gallery.SCORES} for v in gallery.VIEWS}
         return {"phase_error_pp": 0.5, "scores": scores, "mirror_max": mirror, "mirror_chance": 0.05,
                 "copy": {"fraction": 0.5, "view": "front", "index": 3, "inserted": False, "chance": 0.4},
-                "seconds": 1.0, "constrained": ["front", "right"], "seed": 1}
+                "seconds": 1.0, "constrained": ["front", "right"], "seed": seed}
 
     settings = {"method": "ml", "size": 64, "shape": 48, "seeds": [1], "options": {}, "device": "cpu"}
     parts = {"a": {"porous80": [run(0.05)]}, "b": {"inclusions": [run(0.2)], "grains": [run(0.0)]}}
@@ -201,11 +202,17 @@ def test_gallery_merges_runs_split_by_exemplar(tool, tmp_path, capsys):
     assert "- mirror <= 0.1: 2/3\n" in (tmp_path / "ab" / "gallery.md").read_text()
     capsys.readouterr()
     assert gallery.main(["--merge", paths[0], paths[0], "-o", str(tmp_path / "aa")]) == 2
-    assert "porous80 measured in more than one" in capsys.readouterr().err
-    gallery.write_report(tmp_path / "c", dict(settings, seeds=[2]), {"grains": [run(0.0)]})
+    assert "porous80 with seed 1 measured in more than one" in capsys.readouterr().err
+    gallery.write_report(tmp_path / "c", dict(settings, shape=32), {"grains": [run(0.0)]})
     assert gallery.main(["--merge", paths[0], str(tmp_path / "c" / "gallery.json"), "-o", str(tmp_path / "ac")]) == 2
-    assert "seeds differ" in capsys.readouterr().err
+    assert "shape differ" in capsys.readouterr().err
     assert not (tmp_path / "aa").exists() and not (tmp_path / "ac").exists()
+    later = {"porous80": [run(0.3, seed=2)], "grains": [run(0.0, seed=2)]}  # seed 2 after seed 1
+    gallery.write_report(tmp_path / "d", dict(settings, seeds=[2]), later)
+    assert gallery.main(["--merge", str(tmp_path / "d" / "gallery.json"), paths[0], "-o", str(tmp_path / "ad")]) == 0
+    both = {"porous80": [run(0.05), run(0.3, seed=2)], "grains": [run(0.0, seed=2)]}
+    gallery.write_report(tmp_path / "two", dict(settings, seeds=[1, 2]), both)
+    assert (tmp_path / "ad" / "gallery.md").read_text() == (tmp_path / "two" / "gallery.md").read_text()
 
 
 def test_mirror_noise_spread_of_white_noise(tool):

@@ -14,7 +14,7 @@ are counted both on those worst cells and seed by seed.
     python tools/gallery.py -o out/gallery                        # every exemplar, 64^2 -> 48^3
     python tools/gallery.py --names porous50 hrtem --size 128 --shape 64 -o out/g128
     python tools/gallery.py --seeds 1 2 --set neighborhood=7 --set views=3 -o out/g7
-    python tools/gallery.py --merge out/a/gallery.json out/b/gallery.json -o out/ab   # runs split by exemplar
+    python tools/gallery.py --merge out/a/gallery.json out/b/gallery.json -o out/ab   # runs split by exemplar or seed
 """
 
 from __future__ import annotations
@@ -224,8 +224,9 @@ def markdown(rows: dict[str, dict], settings: dict, runs: dict[str, list[dict]] 
               + ("; every exemplar's worst seed):" if len(settings["seeds"]) > 1 else "):"), ""]
     lines += [f"- {label}: {count}{unjudged}" for label, count, unjudged in target_counts(rows)]
     if runs and len(settings["seeds"]) > 1:  # the worst seed of each exemplar is not one seed's block
-        per_seed = [target_counts({name: summarise([r[i]]) for name, r in runs.items()})
-                    for i in range(len(settings["seeds"]))]
+        per_seed = [target_counts({name: summarise(mine) for name, r in runs.items()
+                                   if (mine := [x for x in r if x["seed"] == seed])})
+                    for seed in settings["seeds"]]
         lines += ["", "Seed by seed (" + ", ".join(str(s) for s in settings["seeds"]) + "):", ""]
         lines += [f"- {label}: " + " · ".join(counts[j][1] for counts in per_seed)
                   for j, (label, _, _) in enumerate(per_seed[0])]
@@ -261,29 +262,34 @@ def write_report(outdir: Path, settings: dict, runs: dict[str, list[dict]]) -> N
         json.dumps(jsonable({"settings": settings, "exemplars": rows, "runs": runs}), indent=1), encoding="utf-8")
 
 
-#: Settings that two runs must share to be counted as one gallery (the device may differ).
-MERGE_KEYS = ("method", "size", "shape", "seeds", "options")
+#: Settings that two runs must share to be counted as one gallery (the device and seeds may differ).
+MERGE_KEYS = ("method", "size", "shape", "options")
 
 
 def merge_reports(reports: list[dict]) -> tuple[dict, dict[str, list[dict]]]:
-    """One gallery from the ``gallery.json`` of several runs over different exemplars with
-    the same settings (e.g. two processes, one per core): the settings and the runs, in the
-    order given. Refuses runs whose settings differ or that share an exemplar."""
+    """One gallery from the ``gallery.json`` of several runs with the same settings over
+    different exemplars or different seeds (e.g. two processes, one per core; seeds 3 and 4
+    after 1 and 2): the settings, with every seed, and the runs, exemplars in the order
+    first given, each exemplar's seeds in order. Refuses runs whose settings differ or that
+    measure an exemplar with the same seed twice."""
     first = reports[0]["settings"]
     runs: dict[str, list[dict]] = {}
-    devices = []
+    devices, seeds = [], set()
     for report in reports:
         settings = report["settings"]
         differ = [k for k in MERGE_KEYS if settings.get(k) != first.get(k)]
         if differ:
             raise ValueError(f"cannot merge runs whose {', '.join(differ)} differ")
-        both = sorted(set(runs) & set(report["runs"]))
-        if both:
-            raise ValueError(f"{', '.join(both)} measured in more than one of the runs")
-        runs.update(report["runs"])
+        for name, more in report["runs"].items():
+            had = {r["seed"] for r in runs.get(name, [])}
+            twice = sorted(had & {r["seed"] for r in more})
+            if twice:
+                raise ValueError(f"{name} with seed {twice[0]} measured in more than one of the runs")
+            runs[name] = sorted(runs.get(name, []) + list(more), key=lambda r: r["seed"])
         devices.append(settings["device"])
+        seeds.update(settings["seeds"])
     device = " + ".join(dict.fromkeys(devices))
-    return {**first, "device": device}, runs
+    return {**first, "device": device, "seeds": sorted(seeds)}, runs
 
 
 # ----------------------------------------------------------------------------- main
@@ -303,7 +309,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--device", default=None, help="OpenCL device (default: clsolid's choice)")
     ap.add_argument("--merge", nargs="+", type=Path, metavar="JSON",
                     help="instead of running: one table and gallery.json from the gallery.json of runs over "
-                         "different exemplars with the same settings (no montage: it needs the volumes)")
+                         "different exemplars or seeds with the same settings (no montage: it needs the volumes)")
     ap.add_argument("-o", "--outdir", type=Path, required=True, help="folder for gallery.md/.json and montage.png")
     args = ap.parse_args(argv)
     if args.merge:

@@ -100,7 +100,7 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
         codes = phase_codes(pyr[0]) if params.distance == "weighted" and level == 0 else None
         searched = _searched_table(table, codes, k, params.parent_weight)
         matcher = make_matcher(searched, mismatch=0 if codes is None else k * k)
-        ctx = _level(params, pyr, level, parent_shape, table, searched, centres, vol, matcher, coh)
+        ctx = _level(params, pyr, level, parent_shape, table, searched, centres, vol, matcher, make_matcher, coh)
         ctx.codes = codes
         coh = ctx.coherence
         update = UPDATES[params.method]
@@ -109,7 +109,7 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
         t_iter = time.perf_counter()
         parent = coarse * math.sqrt(params.parent_weight) if use_parent else None  # as the table's parents
         for it in range(1, params.iterations + 1):
-            ctx.exhaustive = it <= params.exact_passes
+            ctx.exhaustive = it <= params.exact_passes or _search_at(params, level) == "exact"
             if params.method == "kopf" and params.rule == "overlap":
                 searches += kopf.overlap_pass(ctx, vol, parent)
             elif params.order != "sets":
@@ -142,7 +142,7 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
 
 def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape: tuple[int, int] | None,
            table: np.ndarray, searched: np.ndarray, centres: np.ndarray, vol: np.ndarray, matcher: Any,
-           coarser: coherence.Coherence | None) -> Level:
+           make_matcher: Callable[..., Any], coarser: coherence.Coherence | None) -> Level:
     """One level's :class:`Level`: weights, and what the method and search keep: kopf's
     grey-level histogram, chen-wang's candidate sets and histograms, the coherence state
     (started from the *coarser* level's). *table* holds the sites' grey values, *searched*
@@ -164,6 +164,9 @@ def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape
     if n_coh:
         rows, cols = valid_sites(pyr[level].shape, parent_shape, k)
         similar = sets[:, :n_coh]
+        if params.method == "kopf" and ctx.values.size <= kopf.MAX_PHASES:  # for its phase balance
+            similar = np.hstack([similar, coherence.phase_nearest(make_matcher, searched, centres, ctx.w_again,
+                                                                  matcher.mismatch)])
         ctx.coherence = coherence.Coherence(rows, cols, pyr[level].shape, similar, vol.shape, params.view_names)
         if coarser is not None:
             ctx.coherence.inherit(coarser)
@@ -227,16 +230,25 @@ def _start(exemplar: np.ndarray, shape: tuple[int, int, int], coarse: np.ndarray
     return coarse[idx].astype(np.float64)
 
 
-#: Rough cost of a finer level against the one before it, by search: 8x the voxels, and with
-#: the exhaustive search about 4x the sites (the coherence candidates do not grow).
-_FINER_COST = {"exact": 32.0, "coherence": 8.0}
+#: Rough cost of a finer level against the one before it, by the two levels' searches: 8x the
+#: voxels, and with the exhaustive search about 4x the sites (the coherence candidates do not
+#: grow); a first level among the candidates after an exhaustive one, about 3x (brick, 64^3).
+_FINER_COST = {("exact", "exact"): 32.0, ("coherence", "coherence"): 8.0, ("exact", "coherence"): 3.0}
+
+
+def _search_at(params: SearchParams, level: int) -> str:
+    """How *level* searches: ``"coherence"`` at the ``coherence_levels`` finest under the
+    coherence search, else ``"exact"``."""
+    return "coherence" if params.search == "coherence" and level < params.coherence_levels else "exact"
 
 
 def _report(params: SearchParams, level: int, it: int, shape: tuple[int, int, int], last_s: float,
             elapsed: float, exemplar: np.ndarray, vol: np.ndarray) -> SweepInfo:
     """The progress report after pass *it* of *level*, with a rough ETA from the last pass."""
-    left = (params.iterations - it) * last_s
-    left += sum(params.iterations * last_s * _FINER_COST[params.search]**j for j in range(1, level + 1))
+    left, cost = (params.iterations - it) * last_s, last_s
+    for finer in range(level - 1, -1, -1):
+        cost *= _FINER_COST[_search_at(params, finer + 1), _search_at(params, finer)]
+        left += params.iterations * cost
     return SweepInfo(scale=params.scales - level, n_scales=params.scales, shape=tuple(shape), sweep=it,
                      max_sweeps=params.iterations, temperature=math.nan, initial_temperature=math.nan,
                      target=math.nan, visited=int(np.prod(shape)), elapsed=elapsed, eta=left,
