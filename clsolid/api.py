@@ -152,8 +152,7 @@ def synthesize(
     label-histogram balance, dense, staggered ``+in`` slices and, on categorical
     exemplars, phase mismatches instead of squared differences. ``relaxation="icm",
     balance=0, slice_layout="aligned", insert_slices=4, distance="squared"`` (with
-    ``bandwidth_factor=1, pyramid="decimate"``) is the thesis's form. See the README,
-    Choices.
+    ``bandwidth_factor=1, pyramid="decimate"``) is the thesis's form. See docs/choices.md.
 
     Parameters
     ----------
@@ -255,7 +254,7 @@ def synthesize(
         ``insert_spacing`` (the thesis's ``+in``: the exemplar is tiled onto one slice of
         each constrained view about every this many voxels of its depth axis, on
         multiples of 2^(scales-1), and trusted (t = 0) at the start of every scale;
-        default 5 for categorical exemplars, 6 for grey ones, README Choices),
+        default 5 for categorical exemplars, 6 for grey ones, docs/choices.md),
         ``insert_slices`` (a number of such slices per view instead; 0 gives the ``-in``
         start, which collapses to the majority), ``slice_layout`` (``"staggered"``,
         the default: each view's slices between the other's, each with its own seeded
@@ -263,12 +262,12 @@ def synthesize(
         the thesis, which makes the block nearly its own x<->z mirror image),
         ``insert_piece`` (0, the default: each ``+in`` slice one exemplar window, as the
         thesis; N: a mosaic of N x N pieces, each from its own seeded window, N a multiple
-        of 2^(scales-1), so that no slice starts as a copy of one window; README Choices),
+        of 2^(scales-1), so that no slice starts as a copy of one window; docs/choices.md),
         ``seam_gap`` (where a ``+in`` slice tiles the exemplar across its edge, as a
         staggered shift or a slice longer than the exemplar does, this many pixels on each
         side of the seam are not written and are grown instead; 0 writes the seam; default
         2 where the exemplar's seam shows, ``clsolid.core.slices.seam_ratio`` above 2, as
-        in photographs of coarse textures, else 0; README Choices),
+        in photographs of coarse textures, else 0; docs/choices.md),
         ``initial_temperature`` (1),
         ``bandwidth`` (Parzen h, one value or one per scale finest first; default
         ``bandwidth_factor`` x Silverman's rule per scale), ``bandwidth_factor`` (multiplies
@@ -276,11 +275,11 @@ def synthesize(
         thesis uses 1: see the README, Quality), ``falloff`` (the sigma, in pixels of each
         scale, of a Gaussian weight on each neighbourhood term by its distance from the
         centre; default 3 for grey exemplars, 0 for categorical ones; 0 = every term alike,
-        the thesis: README Choices), ``parent_weight`` (each of the coarser scale's 3 x 3
+        the thesis: docs/choices.md), ``parent_weight`` (each of the coarser scale's 3 x 3
         parent terms, added to every neighbourhood of the scales whose coarser exemplar is
         at least ``parent_min_side`` pixels on its shorter side (default 64), weighs this
         against 1 for a term of the window; default 4 for categorical exemplars, 0 for grey
-        ones; 0 = none, the thesis: README Choices),
+        ones; 0 = none, the thesis: docs/choices.md),
         ``builtin_size``, and OpenCL tuning: ``vector_width``,
         ``voxels_per_item``, ``local_size``, ``max_batch``.
 
@@ -339,8 +338,8 @@ def synthesize(
         estimate of the rest from ``prune_sample`` sites drawn systematically (None, the
         default: 32 with projected candidates, else 64); with ``prune_projected=D`` (0: off)
         also each voxel's ``prune_projected_k`` (32) sites nearest by the distance projected
-        on the exemplar windows' first D principal axes (squared differences only; README,
-        Performance), searched in the ``prune_projected_probe`` (8) lists of sites (about
+        on the exemplar windows' first D principal axes (squared differences only;
+        docs/performance.md), searched in the ``prune_projected_probe`` (8) lists of sites (about
         sqrt(sites) lists, by k-means) whose centres are nearest (0: every site), in the first
         ``prune_projected_sweeps`` (1) sweeps of each scale (0: every sweep); a neighbourhood whose
         mean (1 - t)^2 is below ``prune_min_weight`` (default 0: none) gets the exact sum
@@ -348,7 +347,7 @@ def synthesize(
         segmented: their own values kept, at most 8 of them) and grey ones with at least
         10,000 sites (about 110² pixels at 11×11), those with ``prune_projected=24``
         (``None``, the default, decides so), and sums smaller grey ones exactly, where the
-        pruned sum missed fine fringes and saved little (README, Performance); the result's
+        pruned sum missed fine fringes and saved little (docs/performance.md); the result's
         ``params`` say what it took.
 
         Distance: ``distance="squared"`` compares neighbourhoods and centre values by squared

@@ -82,7 +82,7 @@ PRESETS: dict[str, Preset] = {p.name: p for p in (
     _np("ch5_np_common", 7, "thesis §5.2.1 (NP_K, the common settings)", _NOISE),
     _np("ch5_np_11", 11, "thesis §5.2.1 (NP_K, 11x11)", _NOISE),
     _ml("ch5_ml_common", 7, "8/8", 0, "thesis §5.3.1 (NP_ML, the common settings)",
-        "-in (no inserted slices) collapses to the exemplar's mode under ICM, as README Choices explains"),
+        "-in (no inserted slices) collapses to the exemplar's mode under ICM, as docs/choices.md explains"),
     _ml("ch5_compare", 9, "1/8", 4, "thesis §5.4 (NP_ML against NP_K; for NP_K use ch5_np_common with "
         "neighborhood 9)"),
     Preset("ch6_hrtem_np", "kopf", (128, 128, 128), 128,

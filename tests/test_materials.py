@@ -220,7 +220,7 @@ def test_a_material_does_not_depend_on_the_values_of_its_phases(device):
 @pytest.mark.parametrize("name, levels, spacing", [("porous50", 32, 5.0), ("composite4", 32, 5.0),
                                                    ("gravel", 32, 6.0), ("composite3", 2, 6.0)])
 def test_slice_spacing_follows_the_exemplar(device, name, levels, spacing):
-    """+in slices every 5 voxels on categorical exemplars, every 6 on grey ones (README, Choices),
+    """+in slices every 5 voxels on categorical exemplars, every 6 on grey ones (docs/choices.md),
     whole exemplar windows on both; a spacing or piece given is kept."""
     ex = gallery_exemplar(name, 64)
     kw = dict(rng=1, device=device, scales=1, neighborhood=3, levels=levels, max_sweeps=1, full_output=True)

@@ -1,6 +1,6 @@
 """``+in`` slices: exemplar slices written into the block at staggered depths of each
 constrained view, shared by the likelihood method (thesis_spec §2.8) and, as an anchor
-against mirror-image blocks, the search methods (README, Choices).
+against mirror-image blocks, the search methods (docs/choices.md).
 
 The functions take a *plan*: any parameters object with ``scales``, ``views`` (2 or 3),
 ``view_names``, ``slice_layout`` (``"aligned"`` or ``"staggered"``), ``insert_slices`` (a
@@ -44,7 +44,7 @@ FALLBACK_SPACING = 6.0
 #: 1 at coarser scales), on exemplars whose seam shows (:func:`seam_ratio` above SEAM_SHOWS):
 #: the seam joins pixels that are not neighbours in the exemplar, and the likelihood sums only
 #: windows inside it. Brick's worst autocorrelation over seeds 1-4 fell from 0.37 to 0.27
-#: (README, Choices).
+#: (docs/choices.md).
 SEAM_GAP = 2
 #: The :func:`seam_ratio` above which an exemplar's seam shows. The gallery's generated
 #: exemplars (made to wrap) measure 0.5-1.3, grass and gravel (photographs, fine-grained)

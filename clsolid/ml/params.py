@@ -42,12 +42,12 @@ INHERITED = ("resynthesize", "fixed")
 # +in slices about every 6 voxels of each constrained view's depth axis (a count given in
 # insert_slices overrides it). Four slices a view at 48^3 (one every 12) left 6 of the 15
 # gallery exemplars above 0.1 mirror correlation, one every 8 left 3, one every 6 none:
-# each slice anchors content that no x<->z-symmetric state shares (README, Choices).
+# each slice anchors content that no x<->z-symmetric state shares (docs/choices.md).
 DEFAULT_INSERT_SPACING = FALLBACK_SPACING
 # Categorical exemplars (those the pruned sum takes): one every 5. Over seeds 1-6 on the ten
 # categorical gallery exemplars it met the mirror target in 55 of 60 runs against 48, C2 in
 # 48 against 44, the rest alike; on grey ones (brick, hrtem) it gained nothing and cut their
-# structure a little (autocorrelation misses 4 -> 6 of 12 runs), so they keep 6 (README, Choices).
+# structure a little (autocorrelation misses 4 -> 6 of 12 runs), so they keep 6 (docs/choices.md).
 CATEGORICAL_INSERT_SPACING = 5.0
 #: How the exemplar of each coarser scale is made. "binomial" low-passes with [1 2 1]/4 before
 #: keeping the even pixels (a Gaussian pyramid, thesis ch. 3); "decimate" keeps them unfiltered
@@ -62,7 +62,7 @@ DEFAULT_BANDWIDTH_FACTOR = 0.2
 # neighbours weigh most: over six seeds hrtem's patch score met 0.3 on 5 seeds against 1 (worst
 # 0.47 -> 0.30) and gravel's worst autocorrelation fell 0.20 -> 0.11, brick's rose 0.30 -> 0.33
 # (4 of 6 seeds within 0.3 either way); on categorical ones it moved nothing to the better
-# (fibres' autocorrelation 0.13 -> 0.32, copies up), so they keep 0 (README, Choices).
+# (fibres' autocorrelation 0.13 -> 0.32, copies up), so they keep 0 (docs/choices.md).
 GREY_FALLOFF = 3.0
 # The coarser scale's 3 x 3 parent terms (parent_weight=None: by the exemplar). On categorical
 # exemplars each weighs 4 against 1 for a window term, at the scales whose coarser exemplar has
@@ -70,7 +70,7 @@ GREY_FALLOFF = 3.0
 # exemplars, seeds 1-4) autocorrelation met in 30 of 36 runs against 22, C2 in 26 against 18,
 # copies 25 of 40 against 21, the mirror 32 against 33; from a 32^2 or 16^2 coarser scale (the
 # 64^2 gallery) they cost (autocorrelation 11 of 16 against 15), and grey exemplars lost at
-# 128^2 (autocorrelation 1 of 10 runs against 4), so those keep 0 (README, Choices).
+# 128^2 (autocorrelation 1 of 10 runs against 4), so those keep 0 (docs/choices.md).
 CATEGORICAL_PARENT_WEIGHT = 4.0
 PARENT_MIN_SIDE = 64
 
@@ -96,13 +96,13 @@ AUTO_PRUNED_LEVELS = 8
 # own windows, 32 sampled sites: grass autocorrelation 0.38/0.41 against the exact 2.24/2.11);
 # the plain pruned sum lost grass (0.62/0.54) and gravel's autocorrelation (1.06 against
 # 0.68). At 64^2 the projected sum missed hrtem's fringes (in the first sweep only too), so
-# smaller grey exemplars keep the exact sum (README, Performance).
+# smaller grey exemplars keep the exact sum (docs/performance.md).
 AUTO_PROJECTED_SITES = 10_000
 AUTO_PROJECTED_AXES = 24
 # Similar windows taken per source (prune_similar=None): where projected candidates supply
 # the near windows, the sources' own windows alone (1), which on the 128^2 grey gallery scored
-# better than 8, 4 or 2 (grass autocorrelation 0.31/0.33 against 1.27/1.21 with 8; README,
-# Performance) and need no table of similar windows (an O(sites^2) search); on the
+# better than 8, 4 or 2 (grass autocorrelation 0.31/0.33 against 1.27/1.21 with 8;
+# docs/performance.md) and need no table of similar windows (an O(sites^2) search); on the
 # categorical gallery (no projected candidates) 4 scored no better than 8.
 DEFAULT_SIMILAR = 8
 PROJECTED_SIMILAR = 1
@@ -123,7 +123,7 @@ _PROJECTED_AS_IT_RAN = {"prune_projected_probe": 0, "prune_projected_sweeps": 0}
 #: phase's shapes count as much as the matrix's. On two labels all three are the same
 #: distance. "auto" takes "weighted" on categorical exemplars (as for the likelihood: their own
 #: values, at most AUTO_PRUNED_LEVELS of them; "mismatch", the same, on two) and "squared" on
-#: grey ones (README, Choices).
+#: grey ones (docs/choices.md).
 DISTANCES = ("auto", "squared", "mismatch", "weighted")
 
 
@@ -160,7 +160,7 @@ class MLParams:
     insert_slices: int | None = None
     insert_spacing: float | None = None  # None: by the exemplar (for_exemplar), else DEFAULT_INSERT_SPACING
     slice_layout: str = "staggered"
-    insert_piece: int = 0  # 0: each +in slice one exemplar window; N: N x N pieces (README, Choices)
+    insert_piece: int = 0  # 0: each +in slice one exemplar window; N: N x N pieces (docs/choices.md)
     seam_gap: int | None = None  # pixels left out by a +in slice's wrap seam; None: by the exemplar (for_exemplar)
     initial_temperature: float = 1.0
     bandwidth_factor: float | tuple[float, ...] | None = None
@@ -182,9 +182,9 @@ class MLParams:
     # axes of the projected candidate search (0: off; None: by the exemplar, for_exemplar;
     # clsolid.ml.pruned.ProjectedWindows)
     prune_projected: int | None = None
-    prune_projected_k: int = 32  # its candidates a voxel and view (README, Performance: 64 cost 1.6x, scored alike)
+    prune_projected_k: int = 32  # its candidates a voxel and view (docs/performance.md: 64 cost 1.6x, scored alike)
     prune_projected_probe: int = 8  # site lists it reads (0: every site; clsolid.ml.pruned.site_lists)
-    # the first sweeps of each scale that search them (0: every sweep; README, Performance)
+    # the first sweeps of each scale that search them (0: every sweep; docs/performance.md)
     prune_projected_sweeps: int = 1
     # 0: each sweep visits the sets over the whole block; N: region by region, cubes of N voxels,
     # every set of one before the next (a tiled run's disk and transfers; tissue scores worse: README, Using it)

@@ -30,19 +30,19 @@ SEARCHES = ("exact", "coherence")
 #: How the matched squares compare a categorical exemplar's phases (clsolid.search.codes):
 #: "squared" grey-level differences (the thesis), "weighted" mismatches of phase codes; "auto":
 #: for kopf weighted on exemplars of 3 to MAX_PHASES values (on two phases the two agree), else
-#: squared (measured worse for chen-wang, mixed for wl: README, Choices).
+#: squared (measured worse for chen-wang, mixed for wl: docs/choices.md).
 DISTANCES = ("auto", "squared", "weighted")
 #: An exemplar with at most this many values is categorical: its voxels take a phase, never a blend.
 MAX_PHASES = 8
 #: kopf's weight of each parent term (the 9 of the coarser level's 3 x 3 square) against the
-#: k x k square's 1: measured on the gallery (README, Choices), it keeps the coarse structure that
+#: k x k square's 1: measured on the gallery (docs/choices.md), it keeps the coarse structure that
 #: the finest level's matches otherwise drift from.
 KOPF_PARENT_WEIGHT = 4.0
 #: chen-wang's candidate set size (thesis §5.2.1, §6.3.3).
 DEFAULT_CANDIDATES = 15
 #: kopf's anchor slices: one about every 6 voxels of each constrained view's depth, as the
 #: likelihood method's +in slices (on the gallery it lifts kopf's mirror correlations <= 0.1
-#: from 10 to 12 of 15 and its autocorrelations <= 0.3 from 3 to 7 of 13; README, Choices).
+#: from 10 to 12 of 15 and its autocorrelations <= 0.3 from 3 to 7 of 13; docs/choices.md).
 DEFAULT_INSERT_SPACING = 6.0
 
 
@@ -77,10 +77,10 @@ class SearchParams:
         coarser level (Wei & Levoy; thesis_spec §1.3). Ignored at the coarsest level.
     parent_weight : float or None
         The weight of each of the parent square's 9 terms in the distance, against 1 for
-        each of the k x k square's (the sources are silent; a departure, README, Choices).
+        each of the k x k square's (the sources are silent; a departure, docs/choices.md).
         None (default): :data:`KOPF_PARENT_WEIGHT` for ``kopf``, whose gallery scores it
         lifts, 1 (the published form) for the others (``chen-wang`` gains from 4 too,
-        ``wl`` does not: README, Choices).
+        ``wl`` does not: docs/choices.md).
     init : {"upsample", "noise"}
         How a finer level starts: the coarser result, each voxel copied to its 2x2x2 block
         (default), or noise drawn from that level's exemplar pixels (Wei & Levoy's reading;
@@ -132,7 +132,7 @@ class SearchParams:
         the thesis). Levels whose exemplar is categorical (at most ``kopf.MAX_PHASES``
         values) are left alone: their voxels are phases, not means. None (default): True
         for ``kopf``, whose re-weighting exists to keep the histogram and alone does not
-        (README, Choices), False for ``wl`` (the published form) and ``chen-wang`` (it
+        (docs/choices.md), False for ``wl`` (the published form) and ``chen-wang`` (it
         copies exemplar pixels).
     balance : float or None
         ``kopf`` only, categorical exemplars: the weighted vote of every conflict-free set
@@ -145,7 +145,7 @@ class SearchParams:
         ``chen-wang`` only: the size of each exemplar site's candidate set, the site itself
         included (the thesis's k; tested with 1, 5, 15, 25; default 15).
     insert_spacing : float or None
-        Anchor slices (a departure; README, Choices): about every ``insert_spacing`` voxels
+        Anchor slices (a departure; docs/choices.md): about every ``insert_spacing`` voxels
         of each constrained view's depth, an exemplar slice at a seeded shift, the views'
         slices staggered (:mod:`clsolid.core.slices`, the likelihood method's ``+in``),
         written into every level but the finest and written again after every pass there,
@@ -188,7 +188,7 @@ class SearchParams:
     #: The anchor slices' layout, count and make (read by :mod:`clsolid.core.slices`): always
     #: staggered, their number set by ``insert_spacing``, each slice one exemplar window, seams
     #: included where it wraps the exemplar (the likelihood method's seam gap did not help kopf's
-    #: brick or tissue, and cost a 24^3 lamellae block its mirror target: README, Choices).
+    #: brick or tissue, and cost a 24^3 lamellae block its mirror target: docs/choices.md).
     slice_layout = "staggered"
     insert_piece = 0
     seam_gap = 0
