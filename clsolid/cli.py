@@ -344,12 +344,10 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
             "prune_similar", "prune_sample", "prune_min_weight", "prune_projected", "prune_projected_k",
-            "prune_projected_probe", "prune_projected_sweeps", "falloff", "parent_min_side", "region", "tile", "scratch",
-            "scheduler",
-            "workers", "indices", "track")
+            "prune_projected_probe", "prune_projected_sweeps", "falloff", "parent_min_side", "region", "tile",
+            "scratch", "scheduler", "workers", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram",
-            "candidates", "specify", "search", "exact_passes", "coherence_levels", "site_map",
-            "source_map")
+            "candidates", "specify", "search", "exact_passes", "coherence_levels", "site_map", "source_map")
 
 
 #: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
