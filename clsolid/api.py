@@ -25,8 +25,8 @@ METHODS = ("ml", "wl", "kopf", "chen-wang")
 OUTPUTS = ("values", "labels")
 #: Options of the search methods (clsolid.search.params.SearchParams).
 _SEARCH_OPTIONS = ("iterations", "inner", "parent", "parent_weight", "init", "rule", "order", "causal", "histogram",
-                   "candidates", "specify", "search", "exact_passes", "coherence_levels", "balance", "insert_spacing",
-                   "distance")
+                   "candidates", "specify", "search", "exact_passes", "coherence_levels", "index_histogram",
+                   "balance", "insert_spacing", "distance")
 #: Options of the search methods that are not parameters of the method (what to report).
 _SEARCH_REPORTS = ("site_map",)
 #: The neighbourhood side each method uses when none is given (ML: 11, measured on the gallery; the
@@ -195,7 +195,10 @@ def synthesize(
         ``exact_passes`` (with ``"coherence"``: the first passes of every level search every
         site and seed the candidates of the rest; default 0), ``coherence_levels`` (with
         ``"coherence"``: how many of the finest levels search among the candidates, the
-        coarser ones every site; default 1 for ``kopf``, every level for the others), and
+        coarser ones every site; default 1 for ``kopf``, every level for the others),
+        ``index_histogram`` (with ``"coherence"``, ``wl`` and ``kopf``: the candidates ranked
+        by Chen & Wang's index histogram too, so that no part of the exemplar is matched far
+        beyond its share; default True for ``kopf`` on grey exemplars), and
         ``site_map=True`` (with ``full_output``) adds the position
         histogram, ``SynthesisResult.site_use``; they return float64 volumes of exemplar values or their means, and
         ``output="labels"`` is refused. The ML-only arguments and options (``heuristic``,

@@ -104,6 +104,10 @@ def _add_synth(sub) -> None:
                    help="search methods, --search coherence: how many of the finest levels search among the "
                         "candidates; the coarser ones search every site (default: 1 for kopf, every level for "
                         "the others)")
+    p.add_argument("--index-histogram", action=argparse.BooleanOptionalAction, default=None,
+                   help="wl, kopf, --search coherence: rank the candidates by Chen & Wang's index histogram too "
+                        "(how often each exemplar site is matched; default: on for kopf on grey exemplars, off "
+                        "on categorical ones and for wl)")
     p.add_argument("--candidates", type=int, default=DEFAULT_CANDIDATES,
                    help="chen-wang: candidate set size per exemplar pixel, itself included (default %(default)s)")
     p.add_argument("--site-map", type=Path, default=None,
@@ -347,7 +351,8 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "prune_projected_probe", "prune_projected_sweeps", "falloff", "parent_min_side", "region", "tile",
             "scratch", "scheduler", "workers", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram",
-            "candidates", "specify", "search", "exact_passes", "coherence_levels", "site_map", "source_map")
+            "candidates", "specify", "search", "exact_passes", "coherence_levels", "index_histogram", "site_map",
+            "source_map")
 
 
 #: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
@@ -507,7 +512,8 @@ def cmd_synth(args) -> int:
                        parent_weight=args.parent_weight, distance=args.distance, init=args.init, rule=args.rule,
                        order=args.order, causal=args.causal, histogram=args.histogram, candidates=args.candidates,
                        search=args.search,
-                       exact_passes=args.exact_passes, coherence_levels=args.coherence_levels, specify=args.specify,
+                       exact_passes=args.exact_passes, coherence_levels=args.coherence_levels,
+                       index_histogram=args.index_histogram, specify=args.specify,
                        builtin_size=args.builtin_size)
         for name in ("balance", "insert_spacing"):  # kopf's defaults are the flags' (ml's); the others' are off
             if args.method == "kopf" or getattr(args, name) != SYNTH_DEFAULTS[name]:

@@ -10,7 +10,7 @@ import pytest
 import clsolid
 from clsolid.cli import main
 from clsolid.gallery import gallery_exemplar
-from clsolid.search import chenwang, driver
+from clsolid.search import chenwang, driver, usage
 from clsolid.search.driver import run_search
 from clsolid.search.match import (CLMatcher, ReferenceMatcher, candidate_sets, exemplar_table,
                                   k_nearest_reference)
@@ -40,7 +40,7 @@ def test_among_equal_neighbourhoods_the_site_is_still_its_own_first_candidate():
 
 
 def test_excess_factor_is_one_up_to_the_uniform_level():
-    np.testing.assert_allclose(chenwang.excess_factor(np.array([0, 5, 10, 20, 40]), 10.0), [1, 1, 1, 2, 4])
+    np.testing.assert_allclose(usage.excess_factor(np.array([0, 5, 10, 20, 40]), 10.0), [1, 1, 1, 2, 4])
 
 
 def test_discrete_solver_takes_the_value_nearest_the_weighted_mean():

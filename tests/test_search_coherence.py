@@ -18,11 +18,11 @@ from clsolid.search.params import SearchParams
 from clsolid.errors import InputError
 
 
-def _coherence(shape=(4, 5, 6), image=(10, 10), k=3, views=("front", "right")):
+def _coherence(shape=(4, 5, 6), image=(10, 10), k=3, views=("front", "right"), spread_eps=None):
     rows, cols = valid_sites(image, None, k)
     similar = np.tile(np.arange(rows.size)[:, None], (1, SIMILAR))  # each site alone: easy to read
     similar[:, 1:] = -1
-    return Coherence(rows, cols, image, similar, shape, views), rows, cols
+    return Coherence(rows, cols, image, similar, shape, views, spread_eps), rows, cols
 
 
 def test_a_neighbours_match_proposes_its_site_shifted_back():
@@ -71,11 +71,56 @@ def test_without_candidates_the_search_is_exhaustive():
     assert coh.matched[0, [0, 3, 5]].tolist() == site.tolist()  # recorded for the neighbours
 
 
-@pytest.mark.parametrize("parent", [False, True])
-def test_the_kernel_searches_as_the_numpy_gathering_does(device, parent):
+def _two_candidates(spread_eps):
+    """Voxel (2, 2, 3)'s front-view candidates: A at distance 4 (its right neighbour's match
+    shifted back) and B at distance 9 (its left neighbour's)."""
+    coh, rows, cols = _coherence(spread_eps=spread_eps)
+    site_at = {(r, c): s for s, (r, c) in enumerate(zip(rows, cols))}
+    a, b = site_at[(5, 4)], site_at[(5, 6)]
+    coh.matched[0, np.ravel_multi_index((2, 2, 4), coh.shape)] = site_at[(5, 5)]
+    coh.matched[0, np.ravel_multi_index((2, 2, 2), coh.shape)] = site_at[(5, 5)]
+    coh.count_usage()
+    table = np.zeros((rows.size, 9))
+    table[a, 0], table[b, 0] = 2.0, -3.0
+    return coh, ReferenceMatcher(table), a, b, np.array([np.ravel_multi_index((2, 2, 3), coh.shape)])
+
+
+def test_the_index_histogram_gives_a_site_used_beyond_its_share_away():
+    """Ranked by (norm + eps) * (1 + max(0, use / uniform - 1)), uniform = 2 views x 120
+    voxels / 64 sites = 3.75: A (norm 2) wins while unused; matched by 8 other voxels
+    (factor 2.13: 4.27 against B's 3) it gives way to B; by distance alone it always wins.
+    The distance returned is the chosen site's, and the use follows every match made."""
+    coh, matcher, a, b, v = _two_candidates(0.01)
+    q = np.zeros((1, 9))
+    assert coh.best(matcher, 0, v, q, None)[0].tolist() == [a]
+    assert coh.usage[a] == 1 and coh.usage.sum() == 3  # v's match, and its two neighbours'
+    coh.record(1, np.arange(8), np.full(8, a))  # 8 voxels of the right view match A
+    assert coh.usage[a] == 9
+    site, dist = coh.best(matcher, 0, v, q, None)
+    assert site.tolist() == [b] and dist.tolist() == [9.0]
+    assert coh.usage[a] == 8 and coh.usage[b] == 1  # v moved from A to B
+    assert coh.excess()[a] == pytest.approx(8 / 3.75) and coh.excess()[b] == 1.0
+    plain, matcher, a, b, v = _two_candidates(None)
+    plain.record(1, np.arange(8), np.full(8, a))
+    assert plain.best(matcher, 0, v, q, None)[0].tolist() == [a] and plain.usage is None
+
+
+def test_the_use_is_counted_anew_from_the_inherited_matches():
+    coarse, c_rows, c_cols = _coherence(shape=(2, 3, 3), image=(10, 10))
+    fine, _, _ = _coherence(shape=(4, 6, 6), image=(20, 20), spread_eps=0.1)
+    coarse.matched[0, :] = 0
+    fine.inherit(coarse)
+    assert fine.usage.sum() == np.count_nonzero(fine.matched >= 0) > 0
+    np.testing.assert_array_equal(fine.usage, np.bincount(fine.matched[fine.matched >= 0],
+                                                          minlength=fine.usage.size))
+
+
+@pytest.mark.parametrize("parent, spread_eps", [(False, None), (True, None), (True, 0.3)])
+def test_the_kernel_searches_as_the_numpy_gathering_does(device, parent, spread_eps):
     """coherence_best gathers squares, parents and proposals on the device: the same sites,
     distances and recorded matches as Coherence.best on NumPy's gathers, for voxels whose
-    squares wrap, a view whose neighbours know nothing (an exhaustive search) and two weightings."""
+    squares wrap, a view whose neighbours know nothing (an exhaustive search) and two
+    weightings; with the index histogram, the same ranking and the same use counted."""
     from clsolid.search.features import centre_weights, exemplar_features, voxel_features
     from clsolid.search.match import candidate_sets
     from clsolid.search.pyramid import gaussian_pyramid
@@ -88,11 +133,13 @@ def test_the_kernel_searches_as_the_numpy_gathering_does(device, parent):
     matcher = CLMatcher(device, table)
     similar = candidate_sets(matcher, table, SIMILAR, centre_weights(k, parent, centre=True))
     views = ("front", "right", "top")
-    twins = [Coherence(rows, cols, pyr[0].shape, similar, shape, views) for _ in range(2)]
-    known = rng.integers(-rows.size // 3, rows.size, (len(views), int(np.prod(shape))))  # about 1 in 4 unknown
+    twins = [Coherence(rows, cols, pyr[0].shape, similar, shape, views, spread_eps) for _ in range(2)]
+    # about 1 in 4 unknown; the known ones crowded on few sites, so that the use weighs
+    known = rng.integers(-rows.size // 3, rows.size, (len(views), int(np.prod(shape)))) // 8
     vol, coarse = rng.random(shape) * 255, (rng.random((3, 5, 5)) * 255 if parent else None)
     for twin in twins:
         twin.matched[...] = np.maximum(known, -1)
+        twin.count_usage()
     colour = colour_sets(shape, k // 2)[0].ravel()  # conflict-free, as the driver's sets
     for centre, corner in ((False, 0), (True, vol.size - 1)):  # at a corner every square wraps
         voxels = np.flatnonzero(colour == colour[corner])
@@ -103,8 +150,11 @@ def test_the_kernel_searches_as_the_numpy_gathering_does(device, parent):
             np.testing.assert_array_equal(got[0], want[0])
             np.testing.assert_array_equal(got[1], want[1])
             np.testing.assert_array_equal(twins[0].matched, twins[1].matched)
+            if spread_eps is not None:
+                np.testing.assert_array_equal(twins[0].usage, twins[1].usage)
         for twin in twins:  # nothing known in the front view: every voxel searched exhaustively there
             twin.matched[0] = -1
+            twin.count_usage()
         twins[0]._device._sent[0] = False  # the host's copy changed: the device's is sent again
 
 
@@ -317,3 +367,48 @@ def test_a_minority_phase_survives_the_coherence_search(device):
     values, counts = np.unique(ex, return_counts=True)
     got = np.array([(vol == v).mean() for v in values])
     assert np.abs(got - counts / counts.sum()).max() < 0.01, (values, got, counts / counts.sum())
+
+
+def test_the_index_histogram_defaults_on_for_kopfs_coherence_search_on_grey_exemplars_and_is_checked():
+    def resolved(n_values=256, **kw):
+        return SearchParams(**kw).for_exemplar(n_values).index_histogram
+
+    assert SearchParams(method="kopf", search="coherence").index_histogram is None  # until the exemplar is known
+    assert resolved(method="kopf", search="coherence") is True  # measured on the gallery's grey exemplars
+    assert resolved(9, method="kopf", search="coherence") is True
+    for phases in (2, 8):  # categorical: it copied more of the exemplar (docs/choices.md)
+        assert resolved(phases, method="kopf", search="coherence") is False
+        assert resolved(phases, method="kopf", search="coherence", index_histogram=True) is True
+    assert resolved(method="kopf") is False  # the exact search has no candidates to rank
+    assert resolved(method="wl", search="coherence") is False  # not measured
+    assert resolved(method="wl", search="coherence", index_histogram=True) is True
+    assert resolved(method="chen-wang", search="coherence") is False
+    with pytest.raises(InputError, match="search='coherence'"):
+        SearchParams(method="kopf", index_histogram=True)
+    with pytest.raises(InputError, match="its own index histogram"):
+        SearchParams(method="chen-wang", search="coherence", index_histogram=True)
+    with pytest.raises(InputError, match="index_histogram"):
+        SearchParams(method="kopf", search="coherence", index_histogram=1)
+    params = SearchParams(method="kopf", search="coherence", index_histogram=False)
+    assert SearchParams.from_dict(params.to_dict()) == params
+
+
+def test_synthesize_and_cli_take_the_index_histogram(tmp_path):
+    import json
+
+    from clsolid.cli import main
+
+    ex = tmp_path / "hrtem.npy"
+    np.save(ex, gallery_exemplar("hrtem", 64)[:32, :32])
+    common = dict(method="kopf", search="coherence", iterations=2, rng=1)
+    on, off = (clsolid.synthesize(ex, (12, 12, 12), index_histogram=flag, **common) for flag in (True, False))
+    assert not np.array_equal(on, off)
+    np.testing.assert_array_equal(clsolid.synthesize(ex, (12, 12, 12), **common), on)  # the default
+    out = tmp_path / "k.npy"
+    assert main(["synth", str(ex), "-o", str(out), "--method", "kopf", "--search", "coherence", "--no-index-histogram",
+                 "--shape", "12", "12", "12", "--iterations", "2", "--seed", "1", "-q"]) == 0
+    assert json.loads((tmp_path / "k.json").read_text())["params"]["index_histogram"] is False
+    np.testing.assert_array_equal(np.load(out), off)
+    assert main(["synth", str(ex), "-o", str(out), "--method", "kopf", "--index-histogram", "--shape", "12", "12",
+                 "12"]) != 0  # the exact search
+    assert main(["synth", str(ex), "-o", str(out), "--index-histogram", "--shape", "12", "12", "12"]) != 0  # ml

@@ -47,6 +47,7 @@ import numpy as np
 
 from .kopf import robust_norm, robust_weights
 from .level import Level
+from .usage import excess_factor, recount
 
 
 @dataclass
@@ -78,21 +79,9 @@ class Sources:
         return self.source.size / self.position.size
 
 
-def excess_factor(counts: np.ndarray, level: float) -> np.ndarray:
-    """``1 + max(0, counts / level - 1)``: 1 up to the uniform *level*, then growing with the
-    excess in units of that level."""
-    return 1.0 + np.maximum(0.0, counts / level - 1.0)
-
-
 #: Voxels of a set whose neighbourhoods are gathered at once (host memory: a set of a
 #: large block would otherwise hold every voxel's neighbourhood in float64).
 CHUNK = 1 << 16
-
-
-def _recount(hist: np.ndarray, old: np.ndarray, new: np.ndarray) -> None:
-    """Move counts from the *old* sites (-1: none) to the *new* ones."""
-    np.subtract.at(hist, old[old >= 0], 1)
-    np.add.at(hist, new, 1)
 
 
 def choose(level: Level, queries: np.ndarray, best: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -126,12 +115,12 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
             queries = level.queries(i, voxels[part], vol, coarse)
             best = level.best(i, voxels[part], vol, coarse, level.w_first, queries)[0]
             chosen[i, part], dist[i, part] = choose(level, queries, best)
-        _recount(src.index, src.chosen[i, voxels], chosen[i])  # the next view sees this one's choices
+        recount(src.index, src.chosen[i, voxels], chosen[i])  # the next view sees this one's choices
         src.chosen[i, voxels] = chosen[i]
     values = level.centres[chosen]
     weights = robust_weights(dist, level.span) / excess_factor(src.position[chosen], src.theta)
     new = chosen[solve(values, weights), np.arange(voxels.size)]
-    _recount(src.position, src.source[voxels], new)
+    recount(src.position, src.source[voxels], new)
     src.source[voxels] = new
     vol.reshape(-1)[voxels] = level.centres[new]
     return chosen.size

@@ -40,6 +40,7 @@ from ..core.views import VIEW_AXES
 from ..errors import DeviceMemoryError
 from .features import square_voxels, voxel_features
 from .match import LOCAL, CLMatcher, square_offsets
+from .usage import excess_factor, recount
 
 #: Side of the square of neighbours whose matches propose candidates.
 NEIGHBOURS = 3
@@ -79,11 +80,20 @@ class Coherence:
         The level's block shape.
     views : tuple of str
         The constrained views.
+    spread_eps : float or None
+        None: each voxel's match is the candidate of least distance. A number: the
+        candidate of least ``(sqrt(distance) + spread_eps) * excess_factor(usage)``
+        (:func:`~clsolid.search.usage.excess_factor`; Chen & Wang's index histogram, as
+        ``chen-wang`` chooses among its candidate sets), ``usage`` counting the voxels
+        (of every view) whose last match is each site and its uniform level views x
+        voxels / sites, so that no part of the exemplar is matched far more than its share
+        (``index_histogram``, :class:`~clsolid.search.params.SearchParams`).
     """
 
     def __init__(self, rows: np.ndarray, cols: np.ndarray, image_shape: tuple[int, int], similar: np.ndarray,
-                 volume_shape: tuple[int, int, int], views: tuple[str, ...]) -> None:
-        self.rows, self.cols, self.similar = rows, cols, similar
+                 volume_shape: tuple[int, int, int], views: tuple[str, ...], spread_eps: float | None = None) -> None:
+        self.rows, self.cols, self.similar, self.spread_eps = rows, cols, similar, spread_eps
+        self.usage = None if spread_eps is None else np.zeros(rows.size, np.int64)
         self.site_at = np.full(image_shape, -1, np.int64)
         self.site_at[rows, cols] = np.arange(rows.size)
         self.shape, self.views = tuple(volume_shape), views
@@ -125,12 +135,38 @@ class Coherence:
                 r = 2 * coarse.rows[s] + np.broadcast_to(parity[row_axis], (n_rows, n_cols)).ravel()
                 c = 2 * coarse.cols[s] + np.broadcast_to(parity[col_axis], (n_rows, n_cols)).ravel()
                 self.matched[i, z * plane:(z + 1) * plane] = self._site(r, c, known)
+        self.count_usage()
+
+    def count_usage(self) -> None:
+        """Count :attr:`usage` anew from every view's matches (after :attr:`matched` was set wholesale)."""
+        if self.usage is not None:
+            known = self.matched[self.matched >= 0]
+            self.usage = np.bincount(known, minlength=self.rows.size).astype(np.int64)
+
+    def assign(self, i: int, voxels: np.ndarray, sites: np.ndarray) -> None:
+        """Take *sites* as the matches of *voxels* in view *i*, and count them in :attr:`usage`."""
+        if self.usage is not None:
+            recount(self.usage, self.matched[i, voxels], np.asarray(sites))
+        self.matched[i, voxels] = sites
 
     def record(self, i: int, voxels: np.ndarray, sites: np.ndarray) -> None:
         """Take *sites* as the matches of *voxels* in view *i* (found by another search)."""
-        self.matched[i, voxels] = sites
+        self.assign(i, voxels, sites)
         if self._device is not None:
             self._device._sent[i] = False  # the device's copy is stale
+
+    def excess(self) -> np.ndarray | None:
+        """Each site's index-histogram factor (float64, ``(n_sites,)``), None without ``spread_eps``."""
+        if self.usage is None:
+            return None
+        return excess_factor(self.usage, self.matched.size / self.usage.size)
+
+    def scores(self, cand: np.ndarray, dist: np.ndarray) -> np.ndarray:
+        """What the candidates *cand* at distances *dist* are ranked by (least first; inf where none)."""
+        if self.usage is None:
+            return dist
+        excess = self.excess()[np.maximum(cand, 0)]
+        return (np.sqrt(np.maximum(dist, 0.0)) + self.spread_eps) * excess
 
     def candidates(self, i: int, voxels: np.ndarray) -> np.ndarray:
         """``(m, NEIGHBOURS^2 * n)`` candidate sites of *voxels* in view *i* (-1: none), n the
@@ -147,13 +183,15 @@ class Coherence:
         none), recorded as the voxel's match. Returns ``(site (m,), distance (m,))``."""
         cand = self.candidates(i, voxels)
         dist = matcher.distances(queries, cand, weights)
-        least = dist.min(axis=1)
-        site = np.where(dist == least[:, None], cand, np.iinfo(np.int64).max).min(axis=1)  # lowest index
-        blind = ~np.isfinite(least)
+        score = self.scores(cand, dist)
+        top = score.min(axis=1)
+        site = np.where(score == top[:, None], cand, np.iinfo(np.int64).max).min(axis=1)  # lowest index
+        blind = ~np.isfinite(top)
+        least = np.where(blind, np.inf, dist[np.arange(cand.shape[0]), np.argmax(cand == site[:, None], axis=1)])
         if blind.any():
             site[blind], least[blind] = matcher.best(queries[blind], weights)
-        self.matched[i, voxels] = site
-        return site, least
+        self.assign(i, voxels, site)
+        return site, least.astype(dist.dtype)
 
     def search(self, matcher: Any, i: int, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None,
                k: int, weights: np.ndarray, queries: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -195,6 +233,7 @@ class DeviceSearch:
         self._matched = [cl.Buffer(ctx, mf.READ_WRITE, 4 * n_voxels) for _ in coh.views]
         self._sent = [False] * len(coh.views)
         self._vol = cl.Buffer(ctx, mf.READ_ONLY, 4 * n_voxels)
+        self._excess = cl.Buffer(ctx, mf.READ_ONLY, 4 * coh.rows.size)  # read only with the index histogram
         self._coarse, self._coarse_of = None, None
         self._room, self._voxels, self._sites, self._dists = 0, None, None, None
 
@@ -232,9 +271,12 @@ class DeviceSearch:
         if m == 0:
             return np.empty(0, np.int64), np.empty(0, np.float32)
         lay = matcher.layout(weights)
+        spread = coh.usage is not None
         kernel = matcher.kernel("coherence_best", KSIDE=k, PARENT=int(coarse is not None),
-                                SIMILAR=coh.similar.shape[1])
+                                SIMILAR=coh.similar.shape[1], SPREAD=int(spread))
         self._buffers(m)
+        if spread:  # the factors as the set begins (a set's voxels do not see each other's matches)
+            cl.enqueue_copy(queue, self._excess, np.ascontiguousarray(coh.excess(), np.float32))
         if not self._sent[i]:
             cl.enqueue_copy(queue, self._matched[i], np.ascontiguousarray(coh.matched[i], np.int32))
             self._sent[i] = True
@@ -245,7 +287,7 @@ class DeviceSearch:
         kernel(queue, (-(-m // LOCAL) * LOCAL,), (LOCAL,), self._vol, *map(np.int32, vol.shape), coarse_buf,
                *map(np.int32, cshape), np.int32(row_axis), np.int32(col_axis), self._voxels, np.int32(m),
                self._matched[i], self._shift, self._similar, np.int32(coh.similar.shape[0]), lay.places, lay.rows,
-               lay.weights, self._sites, self._dists)
+               lay.weights, self._excess, np.float32(coh.spread_eps or 0.0), self._sites, self._dists)
         site, least = np.empty(m, np.int32), np.empty(m, np.float32)
         cl.enqueue_copy(queue, site, self._sites)
         cl.enqueue_copy(queue, least, self._dists)
@@ -255,5 +297,5 @@ class DeviceSearch:
             queries = voxel_features(vol, coarse, voxels[blind], coh.views[i], k)
             site[blind], least[blind] = matcher.best(queries, weights)
             self._sent[i] = False
-        coh.matched[i, voxels] = site
+        coh.assign(i, voxels, site)
         return site, least

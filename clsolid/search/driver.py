@@ -167,7 +167,8 @@ def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape
         if params.method == "kopf" and ctx.values.size <= kopf.MAX_PHASES:  # for its phase balance
             similar = np.hstack([similar, coherence.phase_nearest(make_matcher, searched, centres, ctx.w_again,
                                                                   matcher.mismatch)])
-        ctx.coherence = coherence.Coherence(rows, cols, pyr[level].shape, similar, vol.shape, params.view_names)
+        eps = kopf.EPS_REL * ctx.span if params.index_histogram else None  # Kopf's eps, as chen-wang's
+        ctx.coherence = coherence.Coherence(rows, cols, pyr[level].shape, similar, vol.shape, params.view_names, eps)
         if coarser is not None:
             ctx.coherence.inherit(coarser)
     return ctx

@@ -126,6 +126,18 @@ class SearchParams:
         against 26; README, Gallery), ``scales`` (every level among the candidates, the
         coarsest level's first pass exhaustive) for the others (``chen-wang``'s brick lost
         its autocorrelation with 1: 0.57 against 0.32; ``wl`` not measured).
+    index_histogram : bool or None
+        ``search="coherence"``, ``wl`` and ``kopf``: rank each voxel's candidates by Chen &
+        Wang's index histogram as well as by distance, ``(sqrt(distance) + eps) * (1 +
+        max(0, use / uniform - 1))``, ``use`` the voxels (of every view) whose match is the
+        candidate now and ``uniform`` views x voxels / sites (``chen-wang``'s index weight,
+        here over the k-coherence candidates; ``clsolid.search.coherence``; a departure
+        from the thesis's kopf). A part of the exemplar that fits a periodic state cannot
+        take over the block: on the gallery it turned hrtem's lattice of stripes back into
+        fringes (docs/choices.md). None (default): True for ``kopf`` with the coherence
+        search on a grey exemplar (more than :data:`MAX_PHASES` values), False otherwise
+        (on categorical exemplars it copied more of the exemplar verbatim; ``wl`` not
+        measured; ``chen-wang`` has its own); resolved by :meth:`for_exemplar`.
     specify : bool or None
         ``wl`` and ``kopf``: after every pass, map the block's grey levels rank for rank
         onto the level exemplar's histogram (``clsolid.search.specify``; a departure from
@@ -180,6 +192,7 @@ class SearchParams:
     search: str = "exact"
     exact_passes: int = 0
     coherence_levels: int | None = None
+    index_histogram: bool | None = None
     specify: bool | None = None
     balance: float | None = None
     insert_spacing: float | None = None
@@ -225,6 +238,7 @@ class SearchParams:
             if self.coherence_levels is None:
                 object.__setattr__(self, "coherence_levels", 1 if self.method == "kopf" else self.scales)
             int_in("coherence_levels", self.coherence_levels, 1, 8)
+        self._check_index_histogram()
         int_in("candidates", self.candidates, 1, MAX_K)
         if self.candidates != DEFAULT_CANDIDATES and self.method != "chen-wang":
             raise InputError(f"candidates={self.candidates!r} is chen-wang's candidate set; method "
@@ -267,12 +281,28 @@ class SearchParams:
         object.__setattr__(self, "parent_weight", float(self.parent_weight))
         one_of("distance", self.distance, DISTANCES)
 
+    def _check_index_histogram(self) -> None:
+        if self.index_histogram is None:
+            return  # resolved per exemplar (for_exemplar)
+        if not isinstance(self.index_histogram, bool):
+            raise InputError(f"index_histogram={self.index_histogram!r} must be True, False or None")
+        if self.index_histogram and self.search != "coherence":
+            raise InputError("index_histogram=True ranks the coherence candidates: give search='coherence' (the "
+                             "exact search takes the best match of every site)")
+        if self.index_histogram and self.method == "chen-wang":
+            raise InputError("index_histogram=True: chen-wang keeps its own index histogram, over its candidate sets")
+
     def for_exemplar(self, n_values: int) -> "SearchParams":
-        """These parameters with ``distance="auto"`` resolved for an exemplar of *n_values* grey values."""
-        if self.distance != "auto":
-            return self
-        phases = self.method == "kopf" and 3 <= n_values <= MAX_PHASES
-        return replace(self, distance="weighted" if phases else "squared")
+        """These parameters with ``distance="auto"`` and ``index_histogram=None`` resolved for an
+        exemplar of *n_values* grey values."""
+        out = self
+        if out.distance == "auto":
+            phases = out.method == "kopf" and 3 <= n_values <= MAX_PHASES
+            out = replace(out, distance="weighted" if phases else "squared")
+        if out.index_histogram is None:
+            grey_coherence = out.method == "kopf" and out.search == "coherence" and n_values > MAX_PHASES
+            out = replace(out, index_histogram=grey_coherence)
+        return out
 
     @property
     def view_names(self) -> tuple[str, ...]:

@@ -184,7 +184,9 @@ __kernel void candidate_distances(__global const float *queries, __global const 
 #ifdef KSIDE
 /* The k-coherence search of one view for a conflict-free set, gathering on the device what
  * clsolid.search.coherence does on the host (compile-time KSIDE: the square's side; PARENT:
- * 1 if a coarser level's 3 x 3 square follows it; SIMILAR: sites per proposal).
+ * 1 if a coarser level's 3 x 3 square follows it; SIMILAR: sites per proposal; SPREAD: 1 to
+ * rank the candidates by (sqrt(distance) + spread_eps) * excess[site], the index histogram's
+ * factors of clsolid.search.coherence, 0 by distance alone).
  *
  * vol: the level's block (Z, Y, X) float, toroidal; coarse: the coarser block (cz, cy, cx).
  * The query of voxel v = voxels[i] is its KSIDE x KSIDE square in the plane (row_axis,
@@ -192,7 +194,8 @@ __kernel void candidate_distances(__global const float *queries, __global const 
  * 3 x 3 neighbours n of v in the plane (v included, row by row) proposes
  * similar[shift[matched[n], j], :] (j: n's place; a row of -1 for an unknown match or an
  * invalid shift: shift and similar end with it, at row n_sites). v's match is the candidate
- * of least row_distance, the lowest site on a tie; sites[i] = -1 (dists[i] = +inf) where no
+ * of least rank (above), the lowest site on a tie, dists[i] its row_distance; sites[i] = -1
+ * (dists[i] = +inf) where no
  * neighbour proposes one. matched[v] takes the match: the set's voxels are farther apart
  * than the neighbours read, so no work-item reads what another writes. */
 static int wrap(int a, int n)
@@ -206,7 +209,8 @@ __kernel void coherence_best(__global const float *vol, int vz, int vy, int vx,
                              int row_axis, int col_axis, __global const int *voxels, int n,
                              __global int *matched, __global const int *shift, __global const int *similar,
                              int n_sites, __global const int *keep, __global const float *table,
-                             __global const float *weights, __global int *sites, __global float *dists)
+                             __global const float *weights, __global const float *excess, float spread_eps,
+                             __global int *sites, __global float *dists)
 {
     const int i = get_global_id(0);
     if (i >= n)
@@ -233,7 +237,7 @@ __kernel void coherence_best(__global const float *vol, int vz, int vy, int vx,
 #endif
     floatv x[NV], w[NV];
     query_vectors(xs, keep, weights, x, w);
-    float least = INFINITY;
+    float least = INFINITY, top = INFINITY;  /* top: the chosen candidate's score */
     int best = -1;
     for (int a = 0; a < 3; ++a) {
         const int row = wrap(pos[row_axis] + a - 1, dims[row_axis]) * stride[row_axis];
@@ -245,7 +249,13 @@ __kernel void coherence_best(__global const float *vol, int vz, int vy, int vx,
                 if (c < 0)
                     continue;
                 const float d = row_distance(x, w, table + (size_t)c * (NV * VW));
-                if (d < least || (d == least && c < best)) {
+#if SPREAD
+                const float score = (sqrt(fmax(d, 0.0f)) + spread_eps) * excess[c];
+#else
+                const float score = d;
+#endif
+                if (score < top || (score == top && c < best)) {
+                    top = score;
                     least = d;
                     best = c;
                 }

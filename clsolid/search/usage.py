@@ -1,0 +1,23 @@
+"""How often each exemplar site is used: the live histograms over sites that spread a
+block's matches over the exemplar (Chen & Wang 2010; thesis_spec §1.6.3).
+
+``chen-wang`` keeps two (its index and position histograms, ``clsolid.search.chenwang``);
+``kopf``'s coherence search keeps one, over its views' matches, to choose among the
+candidates (``clsolid.search.coherence``). Both weigh a site by :func:`excess_factor`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def excess_factor(counts: np.ndarray, level: float) -> np.ndarray:
+    """``1 + max(0, counts / level - 1)``: 1 up to the uniform *level*, then growing with the
+    excess in units of that level."""
+    return 1.0 + np.maximum(0.0, counts / level - 1.0)
+
+
+def recount(hist: np.ndarray, old: np.ndarray, new: np.ndarray) -> None:
+    """Move counts of *hist* from the *old* sites (-1: none) to the *new* ones (-1: none)."""
+    np.subtract.at(hist, old[old >= 0], 1)
+    np.add.at(hist, new[new >= 0], 1)
