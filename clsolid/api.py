@@ -198,7 +198,7 @@ def synthesize(
         coarser ones every site; default 1 for ``kopf``, every level for the others),
         ``index_histogram`` (with ``"coherence"``, ``wl`` and ``kopf``: the candidates ranked
         by Chen & Wang's index histogram too, so that no part of the exemplar is matched far
-        beyond its share; default True for ``kopf`` on grey exemplars), and
+        beyond its share; default True for ``wl``, and for ``kopf`` on grey exemplars), and
         ``site_map=True`` (with ``full_output``) adds the position
         histogram, ``SynthesisResult.site_use``; they return float64 volumes of exemplar values or their means, and
         ``output="labels"`` is refused. The ML-only arguments and options (``heuristic``,

@@ -106,8 +106,8 @@ def _add_synth(sub) -> None:
                         "the others)")
     p.add_argument("--index-histogram", action=argparse.BooleanOptionalAction, default=None,
                    help="wl, kopf, --search coherence: rank the candidates by Chen & Wang's index histogram too "
-                        "(how often each exemplar site is matched; default: on for kopf on grey exemplars, off "
-                        "on categorical ones and for wl)")
+                        "(how often each exemplar site is matched; default: on for wl, and for kopf on grey "
+                        "exemplars)")
     p.add_argument("--candidates", type=int, default=DEFAULT_CANDIDATES,
                    help="chen-wang: candidate set size per exemplar pixel, itself included (default %(default)s)")
     p.add_argument("--site-map", type=Path, default=None,

@@ -369,7 +369,7 @@ def test_a_minority_phase_survives_the_coherence_search(device):
     assert np.abs(got - counts / counts.sum()).max() < 0.01, (values, got, counts / counts.sum())
 
 
-def test_the_index_histogram_defaults_on_for_kopfs_coherence_search_on_grey_exemplars_and_is_checked():
+def test_the_index_histogram_defaults_where_it_was_measured_better_and_is_checked():
     def resolved(n_values=256, **kw):
         return SearchParams(**kw).for_exemplar(n_values).index_histogram
 
@@ -380,8 +380,10 @@ def test_the_index_histogram_defaults_on_for_kopfs_coherence_search_on_grey_exem
         assert resolved(phases, method="kopf", search="coherence") is False
         assert resolved(phases, method="kopf", search="coherence", index_histogram=True) is True
     assert resolved(method="kopf") is False  # the exact search has no candidates to rank
-    assert resolved(method="wl", search="coherence") is False  # not measured
-    assert resolved(method="wl", search="coherence", index_histogram=True) is True
+    for n_values in (2, 256):  # measured better on both kinds
+        assert resolved(n_values, method="wl", search="coherence") is True
+    assert resolved(method="wl") is False
+    assert resolved(method="wl", search="coherence", index_histogram=False) is False
     assert resolved(method="chen-wang", search="coherence") is False
     with pytest.raises(InputError, match="search='coherence'"):
         SearchParams(method="kopf", index_histogram=True)

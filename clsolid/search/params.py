@@ -134,10 +134,10 @@ class SearchParams:
         here over the k-coherence candidates; ``clsolid.search.coherence``; a departure
         from the thesis's kopf). A part of the exemplar that fits a periodic state cannot
         take over the block: on the gallery it turned hrtem's lattice of stripes back into
-        fringes (docs/choices.md). None (default): True for ``kopf`` with the coherence
-        search on a grey exemplar (more than :data:`MAX_PHASES` values), False otherwise
-        (on categorical exemplars it copied more of the exemplar verbatim; ``wl`` not
-        measured; ``chen-wang`` has its own); resolved by :meth:`for_exemplar`.
+        fringes (docs/choices.md). None (default): with the coherence search, True for
+        ``wl`` and for ``kopf`` on a grey exemplar (more than :data:`MAX_PHASES` values),
+        False for ``kopf`` on a categorical one (it copied more of the exemplar verbatim)
+        and for ``chen-wang`` (it has its own); resolved by :meth:`for_exemplar`.
     specify : bool or None
         ``wl`` and ``kopf``: after every pass, map the block's grey levels rank for rank
         onto the level exemplar's histogram (``clsolid.search.specify``; a departure from
@@ -300,8 +300,8 @@ class SearchParams:
             phases = out.method == "kopf" and 3 <= n_values <= MAX_PHASES
             out = replace(out, distance="weighted" if phases else "squared")
         if out.index_histogram is None:
-            grey_coherence = out.method == "kopf" and out.search == "coherence" and n_values > MAX_PHASES
-            out = replace(out, index_histogram=grey_coherence)
+            measured_better = out.method == "wl" or (out.method == "kopf" and n_values > MAX_PHASES)
+            out = replace(out, index_histogram=out.search == "coherence" and measured_better)
         return out
 
     @property
