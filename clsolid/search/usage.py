@@ -2,8 +2,9 @@
 block's matches over the exemplar (Chen & Wang 2010; thesis_spec §1.6.3).
 
 ``chen-wang`` keeps two (its index and position histograms, ``clsolid.search.chenwang``);
-``kopf``'s coherence search keeps one, over its views' matches, to choose among the
-candidates (``clsolid.search.coherence``). Both weigh a site by :func:`excess_factor`.
+the coherence search of ``wl`` and ``kopf`` keeps one, over its views' matches, to choose
+among the candidates (``clsolid.search.coherence``, ``index_histogram``). Both weigh a
+site by :func:`excess_factor`.
 """
 
 from __future__ import annotations

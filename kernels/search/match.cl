@@ -195,9 +195,9 @@ __kernel void candidate_distances(__global const float *queries, __global const 
  * similar[shift[matched[n], j], :] (j: n's place; a row of -1 for an unknown match or an
  * invalid shift: shift and similar end with it, at row n_sites). v's match is the candidate
  * of least rank (above), the lowest site on a tie, dists[i] its row_distance; sites[i] = -1
- * (dists[i] = +inf) where no
- * neighbour proposes one. matched[v] takes the match: the set's voxels are farther apart
- * than the neighbours read, so no work-item reads what another writes. */
+ * (dists[i] = +inf) where no neighbour proposes one. matched[v] takes the match: the set's
+ * voxels are farther apart than the neighbours read, so no work-item reads what another
+ * writes. */
 static int wrap(int a, int n)
 {
     const int m = a % n;
