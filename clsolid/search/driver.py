@@ -164,10 +164,13 @@ def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape
     if n_coh:
         rows, cols = valid_sites(pyr[level].shape, parent_shape, k)
         similar = sets[:, :n_coh]
-        if params.method == "kopf" and ctx.values.size <= kopf.MAX_PHASES:  # for its phase balance
+        # A level that searches every site only records its matches (for the finer level's
+        # start): it needs neither the phase candidates nor the sites' use.
+        ranks = _search_at(params, level) == "coherence"
+        if ranks and params.method == "kopf" and ctx.values.size <= kopf.MAX_PHASES:  # for its phase balance
             similar = np.hstack([similar, coherence.phase_nearest(make_matcher, searched, centres, ctx.w_again,
                                                                   matcher.mismatch)])
-        eps = kopf.EPS_REL * ctx.span if params.index_histogram else None  # Kopf's eps, as chen-wang's
+        eps = kopf.EPS_REL * ctx.span if ranks and params.index_histogram else None  # Kopf's eps, as chen-wang's
         ctx.coherence = coherence.Coherence(rows, cols, pyr[level].shape, similar, vol.shape, params.view_names, eps)
         if coarser is not None:
             ctx.coherence.inherit(coarser)
