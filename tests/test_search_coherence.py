@@ -120,7 +120,9 @@ def test_the_kernel_searches_as_the_numpy_gathering_does(device, parent, spread_
     """coherence_best gathers squares, parents and proposals on the device: the same sites,
     distances and recorded matches as Coherence.best on NumPy's gathers, for voxels whose
     squares wrap, a view whose neighbours know nothing (an exhaustive search) and two
-    weightings; with the index histogram, the same ranking and the same use counted."""
+    weightings; with the index histogram, the same ranking and the same use counted. The
+    last call searches every voxel at once (Kopf's overlap rule), neighbours included: each
+    reads its neighbours' matches as the call began (in place, runs with one seed differed)."""
     from clsolid.search.features import centre_weights, exemplar_features, voxel_features
     from clsolid.search.match import candidate_sets
     from clsolid.search.pyramid import gaussian_pyramid
@@ -141,8 +143,9 @@ def test_the_kernel_searches_as_the_numpy_gathering_does(device, parent, spread_
         twin.matched[...] = np.maximum(known, -1)
         twin.count_usage()
     colour = colour_sets(shape, k // 2)[0].ravel()  # conflict-free, as the driver's sets
-    for centre, corner in ((False, 0), (True, vol.size - 1)):  # at a corner every square wraps
-        voxels = np.flatnonzero(colour == colour[corner])
+    calls = [(False, np.flatnonzero(colour == colour[0])),  # at a corner every square wraps
+             (True, np.flatnonzero(colour == colour[-1])), (True, np.arange(vol.size))]
+    for centre, voxels in calls:
         w = centre_weights(k, parent, centre)
         for i, view in enumerate(views):
             got = twins[0].search(matcher, i, voxels, vol, coarse, k, w)

@@ -212,8 +212,11 @@ class DeviceSearch:
 
     The host's :attr:`Coherence.matched` stays the truth; the device keeps a copy per view,
     which the kernel updates as the host does, and which is sent again after the host
-    changed it otherwise (an exhaustive search of voxels without candidates). The block is
-    sent with every set (the method has changed it since), the parent level once.
+    changed it otherwise (an exhaustive search of voxels without candidates). The kernel
+    reads one copy and writes the next (a spare, swapped in after), so that every voxel
+    reads its neighbours' matches as the call began even where the voxels are neighbours
+    (Kopf's overlap rule: with the matches updated in place, runs with one seed differed).
+    The block is sent with every set (the method has changed it since), the parent level once.
     """
 
     def __init__(self, coh: Coherence, matcher: CLMatcher) -> None:
@@ -231,6 +234,7 @@ class DeviceSearch:
 
         self._shift, self._similar = table(coh.shift), table(coh.similar_or_none)
         self._matched = [cl.Buffer(ctx, mf.READ_WRITE, 4 * n_voxels) for _ in coh.views]
+        self._spare = cl.Buffer(ctx, mf.READ_WRITE, 4 * n_voxels)
         self._sent = [False] * len(coh.views)
         self._vol = cl.Buffer(ctx, mf.READ_ONLY, 4 * n_voxels)
         self._excess = cl.Buffer(ctx, mf.READ_ONLY, 4 * coh.rows.size)  # read only with the index histogram
@@ -284,10 +288,12 @@ class DeviceSearch:
         cl.enqueue_copy(queue, self._voxels, np.ascontiguousarray(voxels, np.int32))
         coarse_buf, cshape = self._send_coarse(coarse)
         row_axis, col_axis = VIEW_AXES[coh.views[i]]
+        cl.enqueue_copy(queue, self._spare, self._matched[i])
         kernel(queue, (-(-m // LOCAL) * LOCAL,), (LOCAL,), self._vol, *map(np.int32, vol.shape), coarse_buf,
                *map(np.int32, cshape), np.int32(row_axis), np.int32(col_axis), self._voxels, np.int32(m),
-               self._matched[i], self._shift, self._similar, np.int32(coh.similar.shape[0]), lay.places, lay.rows,
+               self._matched[i], self._spare, self._shift, self._similar, np.int32(coh.similar.shape[0]), lay.places, lay.rows,
                lay.weights, self._excess, np.float32(coh.spread_eps or 0.0), self._sites, self._dists)
+        self._matched[i], self._spare = self._spare, self._matched[i]
         site, least = np.empty(m, np.int32), np.empty(m, np.float32)
         cl.enqueue_copy(queue, site, self._sites)
         cl.enqueue_copy(queue, least, self._dists)

@@ -195,9 +195,9 @@ __kernel void candidate_distances(__global const float *queries, __global const 
  * similar[shift[matched[n], j], :] (j: n's place; a row of -1 for an unknown match or an
  * invalid shift: shift and similar end with it, at row n_sites). v's match is the candidate
  * of least rank (above), the lowest site on a tie, dists[i] its row_distance; sites[i] = -1
- * (dists[i] = +inf) where no neighbour proposes one. matched[v] takes the match: the set's
- * voxels are farther apart than the neighbours read, so no work-item reads what another
- * writes. */
+ * (dists[i] = +inf) where no neighbour proposes one. next[v] takes the match (next holds a
+ * copy of matched): every work-item reads the matches as the call began, whether or not the
+ * voxels are neighbours (Kopf's overlap rule searches the whole block at once). */
 static int wrap(int a, int n)
 {
     const int m = a % n;
@@ -207,7 +207,7 @@ static int wrap(int a, int n)
 __kernel void coherence_best(__global const float *vol, int vz, int vy, int vx,
                              __global const float *coarse, int cz, int cy, int cx,
                              int row_axis, int col_axis, __global const int *voxels, int n,
-                             __global int *matched, __global const int *shift, __global const int *similar,
+                             __global const int *matched, __global int *next, __global const int *shift, __global const int *similar,
                              int n_sites, __global const int *keep, __global const float *table,
                              __global const float *weights, __global const float *excess, float spread_eps,
                              __global int *sites, __global float *dists)
@@ -265,6 +265,6 @@ __kernel void coherence_best(__global const float *vol, int vz, int vy, int vx,
     sites[i] = best;
     dists[i] = least;
     if (best >= 0)
-        matched[v] = best;
+        next[v] = best;
 }
 #endif
