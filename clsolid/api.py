@@ -190,8 +190,9 @@ def synthesize(
         ``kopf`` ``balance`` (categorical exemplars: each set's vote biased toward the
         exemplar's phase fractions, as the likelihood method's balance; default 1, 0 = the
         thesis), ``search``
-        (``"exact"``, default: every exemplar site; ``"coherence"``: the k-coherence
-        candidates of the voxel's neighbours' matches, several times faster),
+        (``"exact"``: every exemplar site, the reference; ``"coherence"``: the k-coherence
+        candidates of the voxel's neighbours' matches, several times faster; default
+        ``"coherence"`` for ``kopf``, ``"exact"`` for ``wl`` and ``chen-wang``),
         ``exact_passes`` (with ``"coherence"``: the first passes of every level search every
         site and seed the candidates of the rest; default 0), ``coherence_levels`` (with
         ``"coherence"``: how many of the finest levels search among the candidates, the

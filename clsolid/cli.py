@@ -94,9 +94,10 @@ def _add_synth(sub) -> None:
                         "kopf, off for wl; --no-specify is the thesis's kopf)")
     p.add_argument("--causal", action="store_true",
                    help="search methods: match the L-shaped causal neighbourhood instead of the full square")
-    p.add_argument("--search", choices=SEARCHES, default="exact",
-                   help="search methods: each view's best match over every exemplar site (default) or among the "
-                        "k-coherence candidates of the voxel's neighbours' matches (faster)")
+    p.add_argument("--search", choices=SEARCHES, default=None,
+                   help="search methods: each view's best match over every exemplar site (the reference) or among "
+                        "the k-coherence candidates of the voxel's neighbours' matches (faster; default: coherence "
+                        "for kopf, exact for wl and chen-wang)")
     p.add_argument("--exact-passes", type=int, default=0, metavar="N",
                    help="search methods, --search coherence: the first N passes of every level search every "
                         "site, seeding the candidates of the passes after (default %(default)s)")

@@ -64,7 +64,7 @@ class Preset:
 def _np(name: str, neighborhood: int, source: str, *extra: str, **options: Any) -> Preset:
     opts = {"neighborhood": neighborhood, "scales": 3, "iterations": 10, "views": 2, "levels": 32,
             "specify": False, "balance": 0.0, "insert_spacing": 0.0, "parent_weight": 1.0, "distance": "squared",
-            **options}
+            "search": "exact", **options}
     return Preset(name, "kopf", (64, 64, 64), 64, opts, source, (_NP_ORDER, _NP_K, *extra))
 
 
@@ -87,7 +87,7 @@ PRESETS: dict[str, Preset] = {p.name: p for p in (
         "neighborhood 9)"),
     Preset("ch6_hrtem_np", "kopf", (128, 128, 128), 128,
            {"neighborhood": 7, "scales": 5, "iterations": 10, "views": 2, "levels": 32, "specify": False,
-            "balance": 0.0, "insert_spacing": 0.0},
+            "balance": 0.0, "insert_spacing": 0.0, "search": "exact"},
            "thesis §6.3.3 (NP_K on an HRTEM image)",
            ("the thesis visits voxels along a 3D Hilbert curve; clsolid updates conflict-free sets in a "
             "seeded order (order='hilbert' visits one voxel at a time, about 0.7 ms a voxel: hours at 128^3)",
@@ -95,7 +95,7 @@ PRESETS: dict[str, Preset] = {p.name: p for p in (
     _ml("ch6_hrtem_ml", 9, "1/8", 4, "thesis §6.3.4 (NP_ML_H2c on an HRTEM image)"),
     Preset("ch5_views", "kopf", (64, 64, 64), 64,
            {"neighborhood": 11, "scales": 3, "iterations": 10, "views": 3, "levels": 32, "specify": False,
-            "balance": 0.0, "insert_spacing": 0.0},
+            "balance": 0.0, "insert_spacing": 0.0, "search": "exact"},
            "thesis §5.5 (NP_K, 11x11, with 1, 2 and 3 views; views=2 for the second)",
            ("one constrained view is not supported: the 1-view run of the thesis cannot be repeated", _NP_ORDER)),
 )}

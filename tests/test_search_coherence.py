@@ -189,7 +189,7 @@ def test_exact_passes_search_every_site_and_seed_the_candidates(device, method):
     ex = gallery_exemplar("composite3", 64)[:32, :32].astype(np.float64)
     common = dict(method=method, neighborhood=5, scales=2, iterations=3, specify=False)
     make = partial(CLMatcher, device)
-    exact = run_search(ex, (10, 12, 14), SearchParams(**common), 3, make).volume
+    exact = run_search(ex, (10, 12, 14), SearchParams(search="exact", **common), 3, make).volume
     every = run_search(ex, (10, 12, 14), SearchParams(search="coherence", exact_passes=3, **common), 3, make).volume
     np.testing.assert_array_equal(every, exact)
     one_scale = {**common, "scales": 1}  # integer grey levels: device and reference agree exactly
@@ -202,13 +202,13 @@ def test_exact_passes_search_every_site_and_seed_the_candidates(device, method):
 
 def test_exact_passes_need_the_coherence_search():
     with pytest.raises(InputError, match="search='coherence'"):
-        SearchParams(method="kopf", exact_passes=1)
+        SearchParams(method="kopf", search="exact", exact_passes=1)
     with pytest.raises(InputError, match="exact_passes"):
         SearchParams(method="kopf", search="coherence", exact_passes=-1)
 
 
 def test_the_coarser_levels_search_every_site(device):
-    """coherence_levels=1 (the default): the coarser level is the exact search's, bit for bit,
+    """coherence_levels=1 (kopf's default, as its coherence search): the coarser level is the exact search's, bit for bit,
     and the finest is not; coherence_levels=2 searches the coarser level among the candidates
     too (the search before this option)."""
     ex = gallery_exemplar("gravel", 64)[:32, :32].astype(np.float64)
@@ -222,8 +222,7 @@ def test_the_coarser_levels_search_every_site(device):
         return run_search(ex, (10, 12, 14), SearchParams(**common, **kw), 3, partial(CLMatcher, device),
                           progress=keep).volume
 
-    exact, default, every = runs("exact"), runs("default", search="coherence"), runs("every", search="coherence",
-                                                                                      coherence_levels=2)
+    exact, default, every = runs("exact", search="exact"), runs("default"), runs("every", coherence_levels=2)
     np.testing.assert_array_equal(coarse["default"], coarse["exact"])
     assert not np.array_equal(coarse["every"], coarse["exact"])
     assert not np.array_equal(default, exact) and not np.array_equal(default, every)
@@ -232,12 +231,12 @@ def test_the_coarser_levels_search_every_site(device):
 def test_coherence_levels_need_the_coherence_search():
     for given in (1, 2):
         with pytest.raises(InputError, match="search='coherence'"):
-            SearchParams(method="kopf", coherence_levels=given)
+            SearchParams(method="kopf", search="exact", coherence_levels=given)
     for bad in (0, 9, 1.5, True):
         with pytest.raises(InputError, match="coherence_levels"):
             SearchParams(method="kopf", search="coherence", coherence_levels=bad)
-    assert SearchParams(method="kopf").coherence_levels is None  # the exact search: nothing to say
-    assert SearchParams(method="kopf", search="coherence").coherence_levels == 1  # measured on the gallery
+    assert SearchParams(method="kopf", search="exact").coherence_levels is None  # nothing to say
+    assert SearchParams(method="kopf").coherence_levels == 1  # kopf's default search; measured on the gallery
     for method in ("wl", "chen-wang"):  # every level, as before the option
         assert SearchParams(method=method, search="coherence", scales=4).coherence_levels == 4
     params = SearchParams(method="chen-wang", search="coherence", coherence_levels=1)
@@ -256,7 +255,7 @@ def test_the_estimate_counts_each_levels_search():
     assert eta == pytest.approx(10 * 3.0)
     every = SearchParams(method="kopf", search="coherence", scales=3, iterations=10, coherence_levels=3)
     assert _report(every, 2, 9, (4, 4, 4), 1.0, 0.0, img, vol).eta == pytest.approx(1 + 10 * 8 + 10 * 64)
-    exact = SearchParams(method="kopf", scales=3, iterations=10)
+    exact = SearchParams(method="kopf", search="exact", scales=3, iterations=10)
     assert _report(exact, 2, 10, (4, 4, 4), 1.0, 0.0, img, vol).eta == pytest.approx(10 * 32 + 10 * 32 * 32)
 
 
@@ -299,6 +298,9 @@ def test_synthesize_and_cli_take_the_search(tmp_path):
     a = clsolid.synthesize("brick", (8, 8, 8), method="kopf", search="coherence", iterations=1, rng=1)
     b = clsolid.synthesize("brick", (8, 8, 8), method="kopf", search="coherence", iterations=1, rng=1)
     assert np.array_equal(a, b)
+    # kopf's default search; the others' is the exact one
+    np.testing.assert_array_equal(clsolid.synthesize("brick", (8, 8, 8), method="kopf", iterations=1, rng=1), a)
+    assert [SearchParams(method=m).search for m in ("kopf", "wl", "chen-wang")] == ["coherence", "exact", "exact"]
     with pytest.raises(clsolid.InputError, match="search='fast'"):
         clsolid.synthesize("brick", (8, 8, 8), method="kopf", search="fast")
     out = tmp_path / "k.npy"
@@ -319,8 +321,8 @@ def test_synthesize_and_cli_take_the_search(tmp_path):
     want = clsolid.synthesize("brick", (8, 8, 8), method="kopf", search="coherence", coherence_levels=3, iterations=2,
                               rng=1)
     np.testing.assert_array_equal(np.load(out), want)
-    assert main(["synth", "brick", "-o", str(out), "--method", "kopf", "--coherence-levels", "2", "--shape", "8", "8",
-                 "8"]) != 0  # the exact search
+    assert main(["synth", "brick", "-o", str(out), "--method", "kopf", "--search", "exact", "--coherence-levels", "2",
+                 "--shape", "8", "8", "8"]) != 0
     assert main(["synth", "brick", "-o", str(out), "--method", "wl", "--search", "coherence", "--shape", "8", "8", "8",
                  "--iterations", "1", "-q"]) == 0
     assert json.loads((tmp_path / "k.json").read_text())["params"]["coherence_levels"] == 3  # every level
@@ -382,14 +384,14 @@ def test_the_index_histogram_defaults_where_it_was_measured_better_and_is_checke
     for phases in (2, 8):  # categorical: it copied more of the exemplar (docs/choices.md)
         assert resolved(phases, method="kopf", search="coherence") is False
         assert resolved(phases, method="kopf", search="coherence", index_histogram=True) is True
-    assert resolved(method="kopf") is False  # the exact search has no candidates to rank
+    assert resolved(method="kopf", search="exact") is False  # no candidates to rank
     for n_values in (2, 256):  # measured better on both kinds
         assert resolved(n_values, method="wl", search="coherence") is True
     assert resolved(method="wl") is False
     assert resolved(method="wl", search="coherence", index_histogram=False) is False
     assert resolved(method="chen-wang", search="coherence") is False
     with pytest.raises(InputError, match="search='coherence'"):
-        SearchParams(method="kopf", index_histogram=True)
+        SearchParams(method="kopf", search="exact", index_histogram=True)
     with pytest.raises(InputError, match="its own index histogram"):
         SearchParams(method="chen-wang", search="coherence", index_histogram=True)
     with pytest.raises(InputError, match="index_histogram"):
@@ -414,6 +416,6 @@ def test_synthesize_and_cli_take_the_index_histogram(tmp_path):
                  "--shape", "12", "12", "12", "--iterations", "2", "--seed", "1", "-q"]) == 0
     assert json.loads((tmp_path / "k.json").read_text())["params"]["index_histogram"] is False
     np.testing.assert_array_equal(np.load(out), off)
-    assert main(["synth", str(ex), "-o", str(out), "--method", "kopf", "--index-histogram", "--shape", "12", "12",
-                 "12"]) != 0  # the exact search
+    assert main(["synth", str(ex), "-o", str(out), "--method", "kopf", "--search", "exact", "--index-histogram",
+                 "--shape", "12", "12", "12"]) != 0
     assert main(["synth", str(ex), "-o", str(out), "--index-histogram", "--shape", "12", "12", "12"]) != 0  # ml
