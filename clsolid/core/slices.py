@@ -126,7 +126,11 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, plan: Any, level: int
     mosaic of square pieces of that side, each from its own seeded window of the exemplar,
     so that no slice starts as one window (the relaxation sews the seams). Otherwise, where
     a slice tiles the exemplar across its edge, ``seam_gap`` pixels on each side of the seam
-    (at least 1 at coarser scales) are left as they were (:data:`SEAM_GAP`). Returns the mask
+    (at least 1 at coarser scales) are left as they were (:data:`SEAM_GAP`). Staggered, where
+    slices of two views cross (a line), slice i of the view written first shows there if
+    i + j is even, slice j of the other if it is odd, so that no view's slices carry all the
+    foreign lines (written in view order, as aligned slices still are, every front slice
+    held the right slices' columns and scored worse; docs/gallery.md). Returns the mask
     of inserted voxels (marked in *mask*, an array of False of *vol*'s shape such as a scratch
     file's, if given); they start each scale trusted (t = 0), like inherited voxels: under
     ICM a voxel at t = 1 ignores its neighbours, so untrusted slices would be overwritten
@@ -159,14 +163,26 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, plan: Any, level: int
 
     Z, Y, X = vol.shape
     FZ, FY, FX = full_shape
+    placed = []  # (axis, depths) of the views written so far, whose crossings are shared
+    share = plan.slice_layout == "staggered"
     for view, full_depths in inserted_depths(full_shape, plan).items():
-        for d in full_depths // 2**level:
+        depths = full_depths // 2**level
+        for k, d in enumerate(depths):
             if view == "front":
                 plane, (img, written) = np.s_[d, :, :], tiled(Y, X, FY, FX)
             elif view == "right":
                 plane, (img, written) = np.s_[:, :, d], (a.T for a in tiled(Y, Z, FY, FZ))
             else:
                 plane, (img, written) = np.s_[:, d, :], tiled(Z, X, FZ, FX)
+            earlier = np.zeros(written.shape, bool)
+            for axis, theirs in placed:  # crossings with an earlier view's slices: it keeps those of even i + k
+                at = axis if axis < DEPTH_AXIS[view] else axis - 1
+                line = np.zeros(written.shape[at], bool)
+                line[[d2 for i, d2 in enumerate(theirs) if (i + k) % 2 == 0]] = True
+                earlier |= line[:, None] if at == 0 else line[None, :]
+            written = written & ~(earlier & mask[plane])
             vol[plane][written] = img[written]
             mask[plane][written] = True
+        if share:
+            placed.append((DEPTH_AXIS[view], depths))
     return mask

@@ -291,8 +291,8 @@ class DeviceSearch:
         cl.enqueue_copy(queue, self._spare, self._matched[i])
         kernel(queue, (-(-m // LOCAL) * LOCAL,), (LOCAL,), self._vol, *map(np.int32, vol.shape), coarse_buf,
                *map(np.int32, cshape), np.int32(row_axis), np.int32(col_axis), self._voxels, np.int32(m),
-               self._matched[i], self._spare, self._shift, self._similar, np.int32(coh.similar.shape[0]), lay.places, lay.rows,
-               lay.weights, self._excess, np.float32(coh.spread_eps or 0.0), self._sites, self._dists)
+               self._matched[i], self._spare, self._shift, self._similar, np.int32(coh.similar.shape[0]), lay.places,
+               lay.rows, lay.weights, self._excess, np.float32(coh.spread_eps or 0.0), self._sites, self._dists)
         self._matched[i], self._spare = self._spare, self._matched[i]
         site, least = np.empty(m, np.int32), np.empty(m, np.float32)
         cl.enqueue_copy(queue, site, self._sites)
