@@ -182,7 +182,7 @@ __kernel void candidate_distances(__global const float *queries, __global const 
 }
 
 #ifdef KSIDE
-/* The k-coherence search of one view for a conflict-free set, gathering on the device what
+/* The k-coherence search of one view for a set of voxels, gathering on the device what
  * clsolid.search.coherence does on the host (compile-time KSIDE: the square's side; PARENT:
  * 1 if a coarser level's 3 x 3 square follows it; SIMILAR: sites per proposal; SPREAD: 1 to
  * rank the candidates by (sqrt(distance) + spread_eps) * excess[site], the index histogram's
@@ -207,7 +207,8 @@ static int wrap(int a, int n)
 __kernel void coherence_best(__global const float *vol, int vz, int vy, int vx,
                              __global const float *coarse, int cz, int cy, int cx,
                              int row_axis, int col_axis, __global const int *voxels, int n,
-                             __global const int *matched, __global int *next, __global const int *shift, __global const int *similar,
+                             __global const int *matched, __global int *next,
+                             __global const int *shift, __global const int *similar,
                              int n_sites, __global const int *keep, __global const float *table,
                              __global const float *weights, __global const float *excess, float spread_eps,
                              __global int *sites, __global float *dists)
