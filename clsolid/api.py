@@ -369,8 +369,11 @@ def synthesize(
     ndarray or SynthesisResult
         ``(Z, Y, X)``. With ``output="values"``, in the exemplar's units and dtype: a
         binary or segmented exemplar's own values (at most ``levels`` distinct values),
-        else the mean exemplar value of each of the ``levels`` levels. With
-        ``output="labels"``, level indices (uint8, uint16 above 256 levels).
+        else the mean exemplar value of each of the ``levels`` levels. A search method's
+        block comes back so where every voxel is one of those values (``chen-wang``;
+        ``kopf`` on a categorical exemplar, or with ``specify``); where it holds blends
+        (``wl``; ``kopf`` with ``specify=False`` on a grey exemplar), as float64 means of
+        them. With ``output="labels"``, level indices (uint8, uint16 above 256 levels).
 
     Raises
     ------
@@ -547,6 +550,8 @@ def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, lev
         name, make_matcher = dev.name, partial(CLMatcher, dev)
     log.info("synthesising %s from a %s exemplar with %s on %s, seed %d", shape, image.shape, method, name, seed)
     vol, timings, use, source = run_search(grey, shape, params, seed, make_matcher, progress, count_sites=site_map)
+    if params.keeps_exemplar_values(np.unique(grey).size):  # exact: each voxel is one of the values
+        vol = vol.astype(levels_of.values.dtype)
     if not full_output:
         return vol
     effective = {**params.to_dict(), "levels": levels, "shape": list(shape)}

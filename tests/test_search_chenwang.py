@@ -100,6 +100,7 @@ def test_block_holds_only_exemplar_pixels_and_the_source_map_says_which(device):
     assert res.source.shape == (16, 16, 16, 2) and res.source.dtype == np.int64
     np.testing.assert_array_equal(img[res.source[..., 0], res.source[..., 1]], res.volume)
     assert np.isin(res.volume, img).all() and np.unique(res.volume).size > 16
+    assert res.volume.dtype == np.uint8  # copies, in the exemplar's dtype (gravel's 8 bits)
     assert res.site_use[res.site_use >= 0].sum() == res.volume.size  # chen-wang's map: each voxel's source, once
     r, c = res.source.reshape(-1, 2).T
     np.testing.assert_array_equal(res.site_use[res.site_use >= 0],

@@ -52,10 +52,15 @@ def test_opencl_run_matches_the_reference(device, name, views):
 def test_a_categorical_exemplar_stays_in_phases_and_a_grey_one_blends(device):
     vol = clsolid.synthesize(gallery_exemplar("composite3", 64), (16, 16, 16), method="kopf", iterations=2,
                              rng=1, device=device)
-    assert set(np.unique(vol)) <= {0.0, 128.0, 255.0} and np.unique(vol).size == 3
+    assert set(np.unique(vol)) <= {0, 128, 255} and np.unique(vol).size == 3
+    assert vol.dtype == np.uint8  # phases, in the exemplar's dtype
     grey = clsolid.synthesize("gravel", (16, 16, 16), method="kopf", iterations=2, specify=False, rng=1,
                               device=device)
-    assert np.unique(grey).size > 64  # weighted means of 32 levels
+    assert np.unique(grey).size > 64 and grey.dtype == np.float64  # weighted means of 32 levels
+    specified = clsolid.synthesize(gallery_exemplar("gravel", 64), (16, 16, 16), method="kopf", iterations=2,
+                                   rng=1, device=device, full_output=True)
+    # mapped onto the exemplar's histogram: its 32 levels' values, in its dtype
+    assert specified.volume.dtype == np.uint8 and np.isin(specified.volume, specified.level_values).all()
 
 
 def test_kopf_keeps_the_minority_phase_better_than_wl(device):

@@ -149,6 +149,14 @@ def test_synthesize_runs_wl(device):
     assert res.params["levels"] == 32 and res.timings["levels"][-1]["level"] == 0
 
 
+def test_wl_with_specify_keeps_the_exemplars_values_and_dtype(device):
+    import clsolid
+
+    res = clsolid.synthesize(gallery_exemplar("gravel", 64), (12, 12, 12), method="wl", scales=2, iterations=1,
+                             specify=True, rng=4, device=device, full_output=True)
+    assert res.volume.dtype == np.uint8 and np.isin(res.volume, res.level_values).all()
+
+
 @pytest.mark.parametrize("kwargs, word", [
     (dict(output="labels"), "no level indices"), (dict(xi=-2.0), "unknown option"),
     (dict(neighborhood=8), "odd"), (dict(iterations=0), "iterations"), (dict(heuristic="h2-min"), "heuristic"),

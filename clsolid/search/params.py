@@ -310,6 +310,17 @@ class SearchParams:
             out = replace(out, index_histogram=out.search == "coherence" and measured_better)
         return out
 
+    def keeps_exemplar_values(self, n_values: int) -> bool:
+        """Whether every voxel of the finished block is one of the exemplar's own values, for
+        an exemplar of *n_values* values: ``chen-wang`` copies pixels, ``kopf`` votes among a
+        categorical exemplar's phases, and ``specify`` maps a grey block onto the exemplar's
+        histogram after every pass; otherwise the block holds means of exemplar values."""
+        if self.method == "chen-wang":
+            return True
+        if n_values <= MAX_PHASES:
+            return self.method == "kopf"
+        return self.specify
+
     @property
     def view_names(self) -> tuple[str, ...]:
         return VIEW_SETS[self.views]
