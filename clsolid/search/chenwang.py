@@ -45,9 +45,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kopf import robust_norm, robust_weights
+from .kopf import EPS_REL, robust_weights
 from .level import Level
-from .usage import excess_factor, recount
+from .usage import excess_factor, recount, spread_rank
 
 
 @dataclass
@@ -90,7 +90,7 @@ def choose(level: Level, queries: np.ndarray, best: np.ndarray) -> tuple[np.ndar
     src = level.sources
     cand = src.candidates[best]  # (m, count)
     dist = level.matcher.distances(queries, cand, level.w_first).astype(np.float64)
-    j = np.argmin(robust_norm(dist, level.span) * excess_factor(src.index[cand], src.phi), axis=1)
+    j = np.argmin(spread_rank(dist, EPS_REL * level.span, excess_factor(src.index[cand], src.phi)), axis=1)
     rows = np.arange(cand.shape[0])
     return cand[rows, j], dist[rows, j]
 

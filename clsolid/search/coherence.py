@@ -40,7 +40,7 @@ from ..core.views import VIEW_AXES
 from ..errors import DeviceMemoryError
 from .features import square_voxels, voxel_features
 from .match import LOCAL, CLMatcher, square_offsets
-from .usage import excess_factor, recount
+from .usage import excess_factor, recount, spread_rank
 
 #: Side of the square of neighbours whose matches propose candidates.
 NEIGHBOURS = 3
@@ -165,8 +165,7 @@ class Coherence:
         """What the candidates *cand* at distances *dist* are ranked by (least first; inf where none)."""
         if self.usage is None:
             return dist
-        excess = self.excess()[np.maximum(cand, 0)]
-        return (np.sqrt(np.maximum(dist, 0.0)) + self.spread_eps) * excess
+        return spread_rank(dist, self.spread_eps, self.excess()[np.maximum(cand, 0)])
 
     def candidates(self, i: int, voxels: np.ndarray) -> np.ndarray:
         """``(m, NEIGHBOURS^2 * n)`` candidate sites of *voxels* in view *i* (-1: none), n the

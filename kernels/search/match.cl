@@ -186,7 +186,7 @@ __kernel void candidate_distances(__global const float *queries, __global const 
  * clsolid.search.coherence does on the host (compile-time KSIDE: the square's side; PARENT:
  * 1 if a coarser level's 3 x 3 square follows it; SIMILAR: sites per proposal; SPREAD: 1 to
  * rank the candidates by (sqrt(distance) + spread_eps) * excess[site], the index histogram's
- * factors of clsolid.search.coherence, 0 by distance alone).
+ * factors: clsolid.search.usage.spread_rank; 0 by distance alone).
  *
  * vol: the level's block (Z, Y, X) float, toroidal; coarse: the coarser block (cz, cy, cx).
  * The query of voxel v = voxels[i] is its KSIDE x KSIDE square in the plane (row_axis,
