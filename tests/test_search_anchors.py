@@ -16,7 +16,7 @@ from clsolid.search.params import SearchParams
 
 
 def test_kopf_anchors_by_default_and_the_others_do_not():
-    assert SearchParams(method="kopf").insert_spacing == 6.0
+    assert SearchParams(method="kopf").insert_spacing == 5.0
     assert SearchParams(method="wl").insert_spacing == 0.0 and SearchParams(method="chen-wang").insert_spacing == 0.0
     assert SearchParams(method="kopf", insert_spacing=0).insert_slices == 0  # no slices at all
     assert SearchParams(method="wl", insert_spacing=4).insert_slices is None  # as many as the spacing says
@@ -56,18 +56,19 @@ def test_coarse_levels_hold_exemplar_slices_and_the_finest_starts_them_from_nois
     assert _anchor(SearchParams(method="kopf", insert_spacing=0), fine, ex, 1, 5, shape) is None
 
 
-@pytest.mark.parametrize("name", ["lamellae", "porous50"])
-def test_anchors_keep_kopf_from_growing_its_own_mirror_image(name):
+@pytest.mark.parametrize("seed", [1, 2])
+def test_anchors_keep_kopf_from_growing_its_own_mirror_image(seed):
     """Without anchors kopf settles into sheets along the x = z diagonal (both views' slices
-    then show the same 2D texture); measured at 24^3 (coherence search): lamellae 0.55 without
-    anchors, 0.14 with them (the exact search 0.56 and 0.13; lamellae's mirror is a miss at
-    48^3 either way, README Gallery), porous50 0.52 and 0.07."""
-    ex = gallery_exemplar(name, 64)
+    then show the same 2D texture). porous50 at 24^3, seeds 1-4: mirror 0.30-0.51 without
+    anchors, -0.10-0.11 with the default's. lamellae is not tested here: a 24^3 block holds
+    too few of its bands for the anchors to decide (0.04-0.69 without, -0.01-0.49 with);
+    at 48^3 its mirror is a slow test (test_materials)."""
+    ex = gallery_exemplar("porous50", 64)
     mirror = {}
-    for spacing in (0, 6):
-        vol = clsolid.synthesize(ex, (24, 24, 24), method="kopf", search="coherence", rng=1, insert_spacing=spacing)
+    for spacing in (0, None):
+        vol = clsolid.synthesize(ex, (24, 24, 24), method="kopf", rng=seed, insert_spacing=spacing)
         mirror[spacing] = next(iter(metrics.mirror_correlations(vol, [(0, 2)]).values()))
-    assert mirror[0] > 0.3 and mirror[6] < mirror[0] / 3, mirror
+    assert mirror[0] > 0.25 and mirror[None] < mirror[0] / 3, mirror
 
 
 def test_the_command_line_passes_the_spacing(tmp_path):

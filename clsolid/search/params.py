@@ -40,10 +40,12 @@ MAX_PHASES = 8
 KOPF_PARENT_WEIGHT = 4.0
 #: chen-wang's candidate set size (thesis §5.2.1, §6.3.3).
 DEFAULT_CANDIDATES = 15
-#: kopf's anchor slices: one about every 6 voxels of each constrained view's depth, as the
-#: likelihood method's +in slices (on the gallery it lifts kopf's mirror correlations <= 0.1
-#: from 10 to 12 of 15 and its autocorrelations <= 0.3 from 3 to 7 of 13; docs/choices.md).
-DEFAULT_INSERT_SPACING = 6.0
+#: kopf's anchor slices: one about every 5 voxels of each constrained view's depth, as the
+#: likelihood method's +in slices on categorical exemplars (on the gallery, 64² -> 48³, seeds
+#: 1-8, against one every 6: mirror correlations <= 0.1 in 106 runs of 120 against 99,
+#: patches <= 0.3 in 80 of 88 against 77; against none, seed 1: mirror 10 -> 12 of 15,
+#: autocorrelation 3 -> 7 of 13; docs/choices.md).
+DEFAULT_INSERT_SPACING = 5.0
 
 
 @dataclass(frozen=True)
@@ -167,7 +169,7 @@ class SearchParams:
         written into every level but the finest and written again after every pass there,
         so that the coarse levels cannot settle into a block that is its own x<->z mirror
         image; the finest level starts those voxels from noise. 0: none (the thesis). None
-        (default): 6 for ``kopf``, 0 for the others.
+        (default): 5 for ``kopf``, 0 for the others.
     distance : {"auto", "squared", "weighted"}
         How the finest level's squares compare the phases of a categorical exemplar:
         squared differences of their grey values (the thesis), or ``"weighted"``
