@@ -194,7 +194,8 @@ def synthesize(
         candidates of the voxel's neighbours' matches, several times faster; default
         ``"coherence"`` for ``kopf``, ``"exact"`` for ``wl`` and ``chen-wang``),
         ``exact_passes`` (with ``"coherence"``: the first passes of every level search every
-        site and seed the candidates of the rest; default 0), ``coherence_levels`` (with
+        site and seed the candidates of the rest; default 1 for ``kopf`` on a grey exemplar,
+        else 0), ``coherence_levels`` (with
         ``"coherence"``: how many of the finest levels search among the candidates, the
         coarser ones every site; default 1 for ``kopf``, every level for the others),
         ``index_histogram`` (with ``"coherence"``, ``wl`` and ``kopf``: the candidates ranked

@@ -98,9 +98,10 @@ def _add_synth(sub) -> None:
                    help="search methods: each view's best match over every exemplar site (the reference) or among "
                         "the k-coherence candidates of the voxel's neighbours' matches (faster; default: coherence "
                         "for kopf, exact for wl and chen-wang)")
-    p.add_argument("--exact-passes", type=int, default=0, metavar="N",
+    p.add_argument("--exact-passes", type=int, default=None, metavar="N",
                    help="search methods, --search coherence: the first N passes of every level search every "
-                        "site, seeding the candidates of the passes after (default %(default)s)")
+                        "site, seeding the candidates of the passes after (default: 1 for kopf on a grey "
+                        "exemplar, else 0)")
     p.add_argument("--coherence-levels", type=int, default=None, metavar="N",
                    help="search methods, --search coherence: how many of the finest levels search among the "
                         "candidates; the coarser ones search every site (default: 1 for kopf, every level for "

@@ -207,6 +207,20 @@ def test_exact_passes_need_the_coherence_search():
         SearchParams(method="kopf", search="coherence", exact_passes=-1)
 
 
+def test_one_exact_pass_is_kopfs_default_on_grey_exemplars_only():
+    def resolved(n_values=256, **kw):
+        return SearchParams(**kw).for_exemplar(n_values).exact_passes
+
+    assert SearchParams(method="kopf").exact_passes is None  # until the exemplar is known
+    assert resolved(method="kopf") == 1 and resolved(9, method="kopf") == 1  # grey: hrtem's patches (docs/gallery.md)
+    for phases in (2, 8):  # categorical: it gained nothing there
+        assert resolved(phases, method="kopf") == 0
+        assert resolved(phases, method="kopf", exact_passes=2) == 2
+    assert resolved(method="kopf", exact_passes=0) == 0
+    assert resolved(method="kopf", search="exact") == 0  # every pass is exhaustive anyway
+    assert resolved(method="wl", search="coherence") == 0 and resolved(method="chen-wang", search="coherence") == 0
+
+
 def test_the_coarser_levels_search_every_site(device):
     """coherence_levels=1 (kopf's default, as its coherence search): the coarser level is the exact search's, bit for bit,
     and the finest is not; coherence_levels=2 searches the coarser level among the candidates
