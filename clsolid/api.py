@@ -541,7 +541,8 @@ def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, lev
     image, levels_of, seed = _load(exemplar, levels, rng, options)
     check_host_memory(shape, "search")
     grey = levels_of.to_values(levels_of.labels).astype(np.float64)
-    params = params.for_exemplar(np.unique(grey).size)
+    n_values = np.unique(grey).size
+    params = params.for_exemplar(n_values)
     if is_reference(device):
         name, make_matcher = "reference (NumPy float64)", ReferenceMatcher
     else:
@@ -551,7 +552,7 @@ def _synthesize_search(exemplar, shape, method, neighborhood, scales, views, lev
         name, make_matcher = dev.name, partial(CLMatcher, dev)
     log.info("synthesising %s from a %s exemplar with %s on %s, seed %d", shape, image.shape, method, name, seed)
     vol, timings, use, source = run_search(grey, shape, params, seed, make_matcher, progress, count_sites=site_map)
-    if params.keeps_exemplar_values(np.unique(grey).size):  # exact: each voxel is one of the values
+    if params.keeps_exemplar_values(n_values):  # exact: each voxel is one of the values
         vol = vol.astype(levels_of.values.dtype)
     if not full_output:
         return vol

@@ -309,16 +309,15 @@ class SearchParams:
     def for_exemplar(self, n_values: int) -> "SearchParams":
         """These parameters with ``distance="auto"``, ``index_histogram=None`` and
         ``exact_passes=None`` resolved for an exemplar of *n_values* grey values."""
-        out = self
+        out, grey_kopf = self, self.method == "kopf" and n_values > MAX_PHASES
         if out.distance == "auto":
             phases = out.method == "kopf" and 3 <= n_values <= MAX_PHASES
             out = replace(out, distance="weighted" if phases else "squared")
         if out.index_histogram is None:
-            measured_better = out.method == "wl" or (out.method == "kopf" and n_values > MAX_PHASES)
+            measured_better = out.method == "wl" or grey_kopf
             out = replace(out, index_histogram=out.search == "coherence" and measured_better)
         if out.exact_passes is None:
-            grey_kopf = out.method == "kopf" and out.search == "coherence" and n_values > MAX_PHASES
-            out = replace(out, exact_passes=1 if grey_kopf else 0)
+            out = replace(out, exact_passes=1 if grey_kopf and out.search == "coherence" else 0)
         return out
 
     def keeps_exemplar_values(self, n_values: int) -> bool:
