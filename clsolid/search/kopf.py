@@ -74,7 +74,7 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
     hist = level.histogram
     sites, ssd = matches(level, vol, coarse, voxels, level.w_first)
     values = level.centres[sites]  # (views, m)
-    bins = hist.bin(values).reshape(values.shape)
+    bins = level.centre_bins[sites]
     factor = np.stack([histogram_factor(level, bins[i], view, voxels)
                        for i, view in enumerate(level.params.view_names)])
     w = robust_weights(ssd, level.span) * factor

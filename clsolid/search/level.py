@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -91,6 +92,11 @@ class Level:
     coherence: Any = None
     exhaustive: bool = False  # this pass searches every site even under the coherence search
     codes: Any = None
+
+    @cached_property
+    def centre_bins(self) -> np.ndarray:
+        """``histogram.bin(centres)``: each site's centre's bin, found once a level, not once a set."""
+        return self.histogram.bin(self.centres)
 
     def searched(self, vol: np.ndarray) -> np.ndarray:
         """The block as the matcher compares it: *vol*, or with ``codes`` its phases' codes."""
