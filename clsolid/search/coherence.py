@@ -38,6 +38,7 @@ import numpy as np
 
 from ..core.views import VIEW_AXES
 from ..errors import DeviceMemoryError
+from .block import DeviceBlock
 from .features import square_voxels, voxel_features
 from .match import LOCAL, CLMatcher, square_offsets
 from .usage import excess_factor, recount, spread_rank
@@ -193,13 +194,14 @@ class Coherence:
         return site, least.astype(dist.dtype)
 
     def search(self, matcher: Any, i: int, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None,
-               k: int, weights: np.ndarray, queries: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+               k: int, weights: np.ndarray, queries: np.ndarray | None = None,
+               block: DeviceBlock | None = None) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`best` for *voxels* of the block *vol* (*coarse*: the parent level, k: the
-        square's side): in one kernel on an OpenCL *matcher*, else with *queries* (gathered
-        here if not given)."""
+        square's side): in one kernel on an OpenCL *matcher* (the block on its device:
+        *block*, made here if not given), else with *queries* (gathered here if not given)."""
         if isinstance(matcher, CLMatcher):
             if self._device is None:
-                self._device = DeviceSearch(self, matcher)
+                self._device = DeviceSearch(self, matcher, block)
             return self._device.best(i, voxels, vol, coarse, k, weights)
         if queries is None:
             queries = voxel_features(vol, coarse, voxels, self.views[i], k)
@@ -215,18 +217,20 @@ class DeviceSearch:
     reads one copy and writes the next (a spare, swapped in after), so that every voxel
     reads its neighbours' matches as the call began even where the voxels are neighbours
     (Kopf's overlap rule: with the matches updated in place, runs with one seed differed).
-    The block is sent with every set (the method has changed it since), the parent level once.
+    The block reaches the device through *block* (:class:`~clsolid.search.block.DeviceBlock`,
+    shared with the level's exhaustive searches; one of its own if not given).
     """
 
-    def __init__(self, coh: Coherence, matcher: CLMatcher) -> None:
+    def __init__(self, coh: Coherence, matcher: CLMatcher, block: DeviceBlock | None = None) -> None:
         import pyopencl as cl
 
         assert NEIGHBOURS == 3  # the kernel reads the 3 x 3 neighbours
         self.coh, self.matcher = coh, matcher
+        self.block = block if block is not None else DeviceBlock(matcher)
         ctx, mf = matcher.device.context, cl.mem_flags
         n_voxels = coh.matched.shape[1]
-        if 4 * n_voxels > matcher.device.max_alloc:  # the block and each view's matches, float32 / int32
-            raise DeviceMemoryError("coherence block", 4 * n_voxels, matcher.device.max_alloc)
+        if 4 * n_voxels > matcher.device.max_alloc:  # each view's matches, int32
+            raise DeviceMemoryError("coherence matches", 4 * n_voxels, matcher.device.max_alloc)
 
         def table(a: np.ndarray):
             return cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a, np.int32))
@@ -235,33 +239,18 @@ class DeviceSearch:
         self._matched = [cl.Buffer(ctx, mf.READ_WRITE, 4 * n_voxels) for _ in coh.views]
         self._spare = cl.Buffer(ctx, mf.READ_WRITE, 4 * n_voxels)
         self._sent = [False] * len(coh.views)
-        self._vol = cl.Buffer(ctx, mf.READ_ONLY, 4 * n_voxels)
         self._excess = cl.Buffer(ctx, mf.READ_ONLY, 4 * coh.rows.size)  # read only with the index histogram
-        self._coarse, self._coarse_of = None, None
-        self._room, self._voxels, self._sites, self._dists = 0, None, None, None
+        self._room, self._sites, self._dists = 0, None, None
 
     def _buffers(self, m: int) -> None:
-        """Room for a set of *m* voxels."""
+        """Room for the results of a set of *m* voxels."""
         import pyopencl as cl
 
         if m > self._room:
             ctx, mf = self.matcher.device.context, cl.mem_flags
             self._room = m
-            self._voxels = cl.Buffer(ctx, mf.READ_ONLY, 4 * m)
             self._sites = cl.Buffer(ctx, mf.WRITE_ONLY, 4 * m)
             self._dists = cl.Buffer(ctx, mf.WRITE_ONLY, 4 * m)
-
-    def _send_coarse(self, coarse: np.ndarray | None):
-        import pyopencl as cl
-
-        if coarse is None:
-            return self._vol, (1, 1, 1)  # not read (PARENT = 0)
-        if coarse is not self._coarse_of:
-            data = np.ascontiguousarray(coarse, np.float32)
-            self._coarse = cl.Buffer(self.matcher.device.context, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,
-                                     hostbuf=data)
-            self._coarse_of = coarse
-        return self._coarse, coarse.shape
 
     def best(self, i: int, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None, k: int,
              weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -283,13 +272,11 @@ class DeviceSearch:
         if not self._sent[i]:
             cl.enqueue_copy(queue, self._matched[i], np.ascontiguousarray(coh.matched[i], np.int32))
             self._sent[i] = True
-        cl.enqueue_copy(queue, self._vol, np.ascontiguousarray(vol, np.float32))
-        cl.enqueue_copy(queue, self._voxels, np.ascontiguousarray(voxels, np.int32))
-        coarse_buf, cshape = self._send_coarse(coarse)
+        leading, voxels_buf = self.block.send(vol, coarse, voxels)
         row_axis, col_axis = VIEW_AXES[coh.views[i]]
         cl.enqueue_copy(queue, self._spare, self._matched[i])
-        kernel(queue, (-(-m // LOCAL) * LOCAL,), (LOCAL,), self._vol, *map(np.int32, vol.shape), coarse_buf,
-               *map(np.int32, cshape), np.int32(row_axis), np.int32(col_axis), self._voxels, np.int32(m),
+        kernel(queue, (-(-m // LOCAL) * LOCAL,), (LOCAL,), *leading, np.int32(row_axis), np.int32(col_axis),
+               voxels_buf, np.int32(m),
                self._matched[i], self._spare, self._shift, self._similar, np.int32(coh.similar.shape[0]), lay.places,
                lay.rows, lay.weights, self._excess, np.float32(coh.spread_eps or 0.0), self._sites, self._dists)
         self._matched[i], self._spare = self._spare, self._matched[i]
@@ -299,8 +286,7 @@ class DeviceSearch:
         site = site.astype(np.int64)
         blind = site < 0
         if blind.any():  # no neighbour proposes a site: an exhaustive search, on the host's copy too
-            queries = voxel_features(vol, coarse, voxels[blind], coh.views[i], k)
-            site[blind], least[blind] = matcher.best(queries, weights)
+            site[blind], least[blind] = self.block.best(coh.views[i], voxels[blind], vol, coarse, k, weights)
             self._sent[i] = False
         coh.assign(i, voxels, site)
         return site, least

@@ -10,7 +10,9 @@ import numpy as np
 
 from ..core.views import DEPTH_AXIS
 from ..exemplar import nearest_level_index
+from .block import DeviceBlock
 from .features import voxel_features
+from .match import CLMatcher
 from .params import SearchParams
 
 
@@ -94,6 +96,14 @@ class Level:
     codes: Any = None
 
     @cached_property
+    def block(self) -> DeviceBlock | None:
+        """The block on an OpenCL matcher's device (:class:`~clsolid.search.block.DeviceBlock`), made
+        at the first search; None for another matcher (the float64 reference)."""
+        if not isinstance(self.matcher, CLMatcher):
+            return None
+        return DeviceBlock(self.matcher)
+
+    @cached_property
     def centre_bins(self) -> np.ndarray:
         """``histogram.bin(centres)``: each site's centre's bin, found once a level, not once a set."""
         return self.histogram.bin(self.centres)
@@ -118,10 +128,15 @@ class Level:
         ``(site (m,), distance (m,))``."""
         k = self.params.neighborhood
         if self.coherence is not None and not self.exhaustive:
-            return self.coherence.search(self.matcher, view, voxels, self.searched(vol), coarse, k, weights, queries)
-        if queries is None:
-            queries = self.queries(view, voxels, vol, coarse)
-        site, least = self.matcher.best(queries, weights)
+            return self.coherence.search(self.matcher, view, voxels, self.searched(vol), coarse, k, weights, queries,
+                                         self.block)
+        if queries is None and self.block is not None:  # gathered on the device
+            site, least = self.block.best(self.params.view_names[view], voxels, self.searched(vol), coarse, k,
+                                          weights)
+        else:
+            if queries is None:
+                queries = self.queries(view, voxels, vol, coarse)
+            site, least = self.matcher.best(queries, weights)
         if self.coherence is not None:  # an exact pass seeds the candidates of the passes after
             self.coherence.record(view, voxels, site)
         return site, least

@@ -18,7 +18,7 @@ ordered by distance, then by site index.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -311,16 +311,31 @@ class CLMatcher:
         """
         import pyopencl as cl
 
-        count = _check_count(count, self.table.shape[0])
         self.layout(weights)
         q = self._as_queries(queries)
-        idx, dist = np.empty((q.shape[0], count), np.int32), np.empty((q.shape[0], count), np.float32)
+        return self.nearest_filled(q.shape[0], count,
+                                   lambda i, n: cl.enqueue_copy(self.device.queue, self._queries, q[i : i + n]))
+
+    @property
+    def query_buffer(self) -> Any:
+        """The device buffer the queries of one launch are read from (``max_batch`` rows)."""
+        return self._queries
+
+    def nearest_filled(self, n_queries: int, count: int,
+                       fill: Callable[[int, int], None]) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`nearest` of *n_queries* queries that ``fill(start, n)`` writes into
+        :attr:`query_buffer` (queries ``start`` to ``start + n``, row by row), at most
+        ``max_batch`` at a time: gathered on the device (:class:`~clsolid.search.block.DeviceBlock`)
+        or copied from the host. The current weights (:meth:`layout`)."""
+        import pyopencl as cl
+
+        count = _check_count(count, self.table.shape[0])
+        idx, dist = np.empty((n_queries, count), np.int32), np.empty((n_queries, count), np.float32)
         queue, kernel, batch = self.device.queue, self.kernel("k_nearest", count), self.max_batch
         lay, per_item = self._layout, _queries_per_item(self.device, count)
-        for i in range(0, q.shape[0], batch):
-            part = q[i : i + batch]
-            n = part.shape[0]
-            cl.enqueue_copy(queue, self._queries, part)
+        for i in range(0, n_queries, batch):
+            n = min(batch, n_queries - i)
+            fill(i, n)
             items = -(-n // per_item)
             kernel(queue, (-(-items // LOCAL) * LOCAL,), (LOCAL,), self._queries, lay.places, lay.table_t, lay.weights,
                    np.int32(n), np.int32(self.n_pad), self._site, self._dist)

@@ -1,0 +1,75 @@
+"""A level's block on the matcher's device, for the kernels that gather the voxels' queries
+there (``voxel_queries`` for the exhaustive search, ``coherence_best``): gathering a set's
+k x k squares on the host and sending them cost about a tenth of a 64^3 ``kopf`` run, the
+block itself is 4 bytes a voxel."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..core.views import VIEW_AXES
+from ..errors import DeviceMemoryError
+from .match import LOCAL, CLMatcher
+
+
+class DeviceBlock:
+    """The block, its coarser level and a set's voxels on *matcher*'s device (room made at
+    the first :meth:`send`).
+
+    The block is sent with every set (the method changes it between sets), the coarser
+    level once (it does not change during a level), the voxels with every set.
+    """
+
+    def __init__(self, matcher: CLMatcher) -> None:
+        self.matcher = matcher
+        self._vol, self._vol_room = None, 0
+        self._coarse, self._coarse_of = None, None
+        self._voxels, self._room = None, 0
+
+    def send(self, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.ndarray) -> tuple[Any, ...]:
+        """Send *vol*, *coarse* (if new) and *voxels*; returns the kernels' leading arguments:
+        ``(vol, vz, vy, vx, coarse, cz, cy, cx)``, then the voxels' buffer."""
+        import pyopencl as cl
+
+        device = self.matcher.device
+        queue, ctx, mf = device.queue, device.context, cl.mem_flags
+        if vol.size > self._vol_room:
+            if 4 * vol.size > device.max_alloc:  # float32 a voxel
+                raise DeviceMemoryError("search block", 4 * vol.size, device.max_alloc)
+            self._vol, self._vol_room = cl.Buffer(ctx, mf.READ_ONLY, 4 * vol.size), vol.size
+        cl.enqueue_copy(queue, self._vol, np.ascontiguousarray(vol, np.float32))
+        if voxels.size > self._room:
+            self._room = voxels.size
+            self._voxels = cl.Buffer(ctx, mf.READ_ONLY, 4 * voxels.size)
+        cl.enqueue_copy(queue, self._voxels, np.ascontiguousarray(voxels, np.int32))
+        if coarse is None:
+            coarse_buf, cshape = self._vol, (1, 1, 1)  # not read (PARENT = 0)
+        else:
+            if coarse is not self._coarse_of:
+                self._coarse = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR,
+                                         hostbuf=np.ascontiguousarray(coarse, np.float32))
+                self._coarse_of = coarse
+            coarse_buf, cshape = self._coarse, coarse.shape
+        return (self._vol, *map(np.int32, vol.shape), coarse_buf, *map(np.int32, cshape)), self._voxels
+
+    def best(self, view: str, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None, k: int,
+             weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The exhaustive best match of *voxels* of *vol* (as the matcher compares it; *coarse*
+        its parent level, scaled as the table's parents are) in *view*, their queries gathered
+        on the device: :meth:`CLMatcher.best` of
+        :func:`~clsolid.search.features.voxel_features`. Returns ``(site (m,) int64,
+        distance (m,) float32)``."""
+        matcher = self.matcher
+        matcher.layout(weights)
+        leading, voxels_buf = self.send(vol, coarse, voxels)
+        gather = matcher.kernel("voxel_queries", KSIDE=k, PARENT=int(coarse is not None))
+        row_axis, col_axis = VIEW_AXES[view]
+
+        def fill(start: int, n: int) -> None:
+            gather(matcher.device.queue, (-(-n // LOCAL) * LOCAL,), (LOCAL,), *leading, np.int32(row_axis),
+                   np.int32(col_axis), voxels_buf, np.int32(start), np.int32(n), matcher.query_buffer)
+
+        site, dist = matcher.nearest_filled(voxels.size, 1, fill)
+        return site[:, 0], dist[:, 0]
