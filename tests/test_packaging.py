@@ -21,5 +21,6 @@ def test_wheel_contains_the_kernels(tmp_path):
     wheel = next(tmp_path.glob("clsolid-*.whl"))
     names = zipfile.ZipFile(wheel).namelist()
     assert {"clsolid/kernels/ml/likelihood.cl", "clsolid/kernels/core/init.cl",
-            "clsolid/kernels/search/match.cl", "clsolid/search/match.py"} <= set(names)
+            "clsolid/kernels/search/match.cl", "clsolid/kernels/search/gather.cl", "clsolid/search/match.py",
+            "clsolid/search/block.py"} <= set(names)
     assert "clsolid/cli.py" in names

@@ -57,3 +57,16 @@ def test_phase_codes_and_a_new_block_and_parent(device):
         want = matcher.best(voxel_features(vol, None, voxels, "right", k), w)
         np.testing.assert_array_equal(got[0], want[0])
         np.testing.assert_array_equal(got[1], want[1])
+
+
+def test_a_program_of_two_files_is_built_as_one_and_named_by_both(device):
+    """coherence_best (match.cl) uses gather.cl's voxel_query: built after it, in one
+    program; a failed build names both files."""
+    from clsolid.core import programs
+    from clsolid.errors import KernelBuildError
+
+    ok = dict(QDIM=9, DIM=8, VW=4, K=1, UNIT=1, NMIS=0, QB=1, KSIDE=3, PARENT=0, SIMILAR=4, SPREAD=0)
+    kernels = programs.build(device, ("search/gather.cl", "search/match.cl"), ok)
+    assert {"voxel_queries", "coherence_best", "k_nearest"} <= set(kernels)
+    with pytest.raises(KernelBuildError, match="kernels/search/match.cl \\+ kernels/search/gather.cl"):
+        programs.build(device, ("search/match.cl", "search/gather.cl"), ok)  # voxel_query used before it is defined

@@ -44,15 +44,19 @@ def include_options() -> list[str]:
     return ["-I", str(Path(cl.__file__).parent / "cl")]
 
 
-def build(device: Device, name: str, defines: dict[str, int | float] | None = None) -> dict:
-    """Build ``kernels/<name>`` with ``-D`` *defines*; return its kernels by name.
+def build(device: Device, name: str | tuple[str, ...], defines: dict[str, int | float] | None = None) -> dict:
+    """Build ``kernels/<name>`` with ``-D`` *defines*; return its kernels by name. Several
+    names: one program of their sources in that order (a file that uses another's functions
+    after it).
 
     Programs are cached on the Device by (source, options) and every kernel object is
     retrieved once, so repeated calls are free.
     """
     import pyopencl as cl
 
-    source = read_source(name)
+    names = (name,) if isinstance(name, str) else tuple(name)
+    source = "\n".join(read_source(n) for n in names)
+    title = " + ".join(f"kernels/{n}" for n in names)
     # -w: PoCL on AVX2 CPUs notes that float16 arguments change the ABI, once per call
     # site, and prints "N warnings generated." on every run; nothing there is actionable.
     macros = tuple(f"-D{k}={v}" for k, v in sorted((defines or {}).items()))
@@ -67,7 +71,7 @@ def build(device: Device, name: str, defines: dict[str, int | float] | None = No
             program = cl.Program(device.context, source).build(options=list(options))
     except cl.RuntimeError as exc:
         raise KernelBuildError(
-            f"building kernels/{name} with {' '.join(macros) or 'no defines'} failed on "
+            f"building {title} with {' '.join(macros) or 'no defines'} failed on "
             f"{device.name}:\n{exc}"
         ) from exc
     kernels = {k.function_name: k for k in program.all_kernels()}

@@ -1,5 +1,6 @@
 """A level's block on the matcher's device, for the kernels that gather the voxels' queries
-there (``voxel_queries`` for the exhaustive search, ``coherence_best``): gathering a set's
+there (``kernels/search/gather.cl``: ``voxel_queries`` for the exhaustive search, and
+``coherence_best``): gathering a set's
 k x k squares on the host and sending them cost about a tenth of a 64^3 ``kopf`` run, the
 block itself is 4 bytes a voxel."""
 
@@ -9,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from ..core import programs
 from ..core.views import VIEW_AXES
 from ..errors import DeviceMemoryError
 from .match import LOCAL, CLMatcher
@@ -64,7 +66,9 @@ class DeviceBlock:
         matcher = self.matcher
         matcher.layout(weights)
         leading, voxels_buf = self.send(vol, coarse, voxels)
-        gather = matcher.kernel("voxel_queries", KSIDE=k, PARENT=int(coarse is not None))
+        # a small program of its own: the same for every weighting and every count
+        gather = programs.build(matcher.device, "search/gather.cl",
+                                {"QDIM": matcher.dim, "KSIDE": k, "PARENT": int(coarse is not None)})["voxel_queries"]
         row_axis, col_axis = VIEW_AXES[view]
 
         def fill(start: int, n: int) -> None:

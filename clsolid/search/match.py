@@ -285,11 +285,13 @@ class CLMatcher:
         return self._layouts[key]
 
     def kernel(self, name: str, count: int = 1, **defines: int):
-        """Kernel *name* of ``search/match.cl`` built for the current weights (and *defines*)."""
+        """Kernel *name* of ``search/match.cl`` built for the current weights (and *defines*;
+        with ``KSIDE``, after ``search/gather.cl``, whose gathering ``coherence_best`` uses)."""
         lay = self._layout
         defines.update(QDIM=self.dim, DIM=lay.keep.size, VW=self._vw, K=count, UNIT=int(lay.unit), NMIS=lay.nmis,
                        QB=_queries_per_item(self.device, count))
-        return programs.build(self.device, "search/match.cl", defines)[name]
+        files = ("search/gather.cl", "search/match.cl") if "KSIDE" in defines else "search/match.cl"
+        return programs.build(self.device, files, defines)[name]
 
     def layout(self, weights: np.ndarray | None = None) -> "_Layout":
         """The device tables of *weights*, which replace the current ones (if given)."""
