@@ -25,7 +25,8 @@ METHODS = ("ml", "wl", "kopf", "chen-wang")
 OUTPUTS = ("values", "labels")
 #: Options of the search methods (clsolid.search.params.SearchParams).
 _SEARCH_OPTIONS = ("iterations", "inner", "parent", "parent_weight", "init", "rule", "order", "causal", "histogram",
-                   "candidates", "specify", "search", "exact_passes", "coherence_levels", "index_histogram",
+                   "candidates", "specify", "search", "exact_passes", "seed_components", "coherence_levels",
+                   "index_histogram",
                    "balance", "insert_spacing", "distance")
 #: Options of the search methods that are not parameters of the method (what to report).
 _SEARCH_REPORTS = ("site_map",)
@@ -195,7 +196,9 @@ def synthesize(
         ``"coherence"`` for ``kopf``, ``"exact"`` for ``wl`` and ``chen-wang``),
         ``exact_passes`` (with ``"coherence"``: the first passes of every level search every
         site and seed the candidates of the rest; default 1 for ``kopf`` on a grey exemplar,
-        else 0), ``coherence_levels`` (with
+        else 0), ``seed_components`` (with ``"coherence"``: those passes compare the sites
+        on this many leading principal components, the site found then measured on every
+        term; 0: every term; default 16 for ``kopf``, else 0), ``coherence_levels`` (with
         ``"coherence"``: how many of the finest levels search among the candidates, the
         coarser ones every site; default 1 for ``kopf``, every level for the others),
         ``index_histogram`` (with ``"coherence"``, ``wl`` and ``kopf``: the candidates ranked

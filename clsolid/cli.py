@@ -102,6 +102,10 @@ def _add_synth(sub) -> None:
                    help="search methods, --search coherence: the first N passes of every level search every "
                         "site, seeding the candidates of the passes after (default: 1 for kopf on a grey "
                         "exemplar, else 0)")
+    p.add_argument("--seed-components", type=int, default=None, metavar="N",
+                   help="search methods, --search coherence: the exact passes compare the sites on the N leading "
+                        "principal components of the neighbourhoods, each site found then measured on every term "
+                        "(0: every term; default: 16 for kopf, else 0; phase codes always every term)")
     p.add_argument("--coherence-levels", type=int, default=None, metavar="N",
                    help="search methods, --search coherence: how many of the finest levels search among the "
                         "candidates; the coarser ones search every site (default: 1 for kopf, every level for "
@@ -353,8 +357,8 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "prune_projected_probe", "prune_projected_sweeps", "falloff", "parent_min_side", "region", "tile",
             "scratch", "scheduler", "workers", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram",
-            "candidates", "specify", "search", "exact_passes", "coherence_levels", "index_histogram", "site_map",
-            "source_map")
+            "candidates", "specify", "search", "exact_passes", "seed_components", "coherence_levels", "index_histogram",
+            "site_map", "source_map")
 
 
 #: What a checkpoint fixes: given with --resume, these flags are an error, not ignored.
@@ -514,7 +518,8 @@ def cmd_synth(args) -> int:
                        parent_weight=args.parent_weight, distance=args.distance, init=args.init, rule=args.rule,
                        order=args.order, causal=args.causal, histogram=args.histogram, candidates=args.candidates,
                        search=args.search,
-                       exact_passes=args.exact_passes, coherence_levels=args.coherence_levels,
+                       exact_passes=args.exact_passes, seed_components=args.seed_components,
+                       coherence_levels=args.coherence_levels,
                        index_histogram=args.index_histogram, specify=args.specify,
                        builtin_size=args.builtin_size)
         for name in ("balance", "insert_spacing"):  # kopf's defaults are the flags' (ml's); the others' are off

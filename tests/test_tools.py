@@ -60,8 +60,9 @@ def test_bench_search_runs(capsys, device, tool):
     assert "% of matmul" in out and "candidate distances/s" in out and "same site on 100.00% of 8" in out
     for method in ("wl", "kopf", "chen-wang"):
         assert f"{method}, exact search: brick" in out
-    for method, passes in (("wl", 0), ("kopf", 1), ("chen-wang", 0)):  # kopf's default on a grey exemplar
-        assert f"{method}, coherence search, first {passes} pass(es) exhaustive: brick" in out
+    for method, passes, terms in (("wl", 0, "every term"), ("kopf", 1, "16 principal components"),
+                                  ("chen-wang", 0, "every term")):  # kopf's defaults on a grey exemplar
+        assert f"{method}, coherence search, first {passes} pass(es) exhaustive on {terms}: brick" in out
     assert "end to end" in out
 
 

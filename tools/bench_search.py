@@ -51,6 +51,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--iterations", type=int, default=10, help="passes per scale (default 10)")
     ap.add_argument("--exact-passes", type=int, default=None, metavar="N",
                     help="the coherence search's exhaustive first passes (default: the method's; kopf on brick 1)")
+    ap.add_argument("--seed-components", type=int, default=None, metavar="N",
+                    help="the principal components those passes compare (default: the method's; kopf 16; "
+                         "0: every term)")
     args = ap.parse_args(argv)
     device = clsolid.select_device(args.device)
     k = args.neighborhood
@@ -87,7 +90,8 @@ def main(argv: list[str] | None = None) -> None:
           f"same site on {np.mean(got[:n] == want):.2%} of {n} queries")
     for method in [m for m in args.methods if m != "none"]:
         for search in args.searches:
-            seeded = {"exact_passes": args.exact_passes} if search == "coherence" else {}
+            seeded = ({"exact_passes": args.exact_passes, "seed_components": args.seed_components}
+                      if search == "coherence" else {})
             t = time.perf_counter()
             res = clsolid.synthesize("brick", (args.shape,) * 3, method=method, neighborhood=k, scales=3,
                                      iterations=args.iterations, search=search, rng=1, device=device,
@@ -95,7 +99,10 @@ def main(argv: list[str] | None = None) -> None:
             total = time.perf_counter() - t
             levels = "; ".join(f"{'x'.join(map(str, lv['shape']))}: {lv['seconds'] / args.iterations:.2f} s a pass"
                                for lv in res.timings["levels"])
-            exhaustive = f", first {res.params['exact_passes']} pass(es) exhaustive" if search == "coherence" else ""
+            terms = (f"{res.params['seed_components']} principal components" if res.params["seed_components"]
+                     else "every term")
+            exhaustive = (f", first {res.params['exact_passes']} pass(es) exhaustive on {terms}"
+                          if search == "coherence" else "")
             print(f"{method}, {search} search{exhaustive}: brick 64x64, 32 levels -> {args.shape}^3, {k}x{k}, "
                   f"3 scales, {args.iterations} passes: {total:.1f} s end to end ({levels})", flush=True)
 

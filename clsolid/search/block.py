@@ -14,6 +14,7 @@ from ..core import programs
 from ..core.views import VIEW_AXES
 from ..errors import DeviceMemoryError
 from .match import LOCAL, CLMatcher
+from .projection import Projection
 
 
 class DeviceBlock:
@@ -77,3 +78,32 @@ class DeviceBlock:
 
         site, dist = matcher.nearest_filled(voxels.size, 1, fill)
         return site[:, 0], dist[:, 0]
+
+    def best_projected(self, view: str, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None, k: int,
+                       projection: Projection) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`best`, the sites compared on *projection*'s principal components: the
+        queries gathered, then projected (``project_queries``), on the device; each found
+        site's distance on every term (:meth:`Projection.distances`). Returns ``(site (m,)
+        int64, distance (m,) float32)``."""
+        import pyopencl as cl
+
+        matcher, queue = self.matcher, self.matcher.device.queue
+        projected = projection.device_matcher(matcher)
+        leading, voxels_buf = self.send(vol, coarse, voxels)
+        program = programs.build(matcher.device, "search/gather.cl", {
+            "QDIM": matcher.dim, "KSIDE": k, "PARENT": int(coarse is not None), "COMPONENTS": projection.components})
+        basis, offset = (cl.Buffer(matcher.device.context, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,
+                                   hostbuf=a) for a in projection.folded())
+        row_axis, col_axis = VIEW_AXES[view]
+        queries = np.empty((voxels.size, matcher.dim), np.float32)  # read back for the distances
+
+        def fill(start: int, n: int) -> None:
+            size = (-(-n // LOCAL) * LOCAL,)
+            program["voxel_queries"](queue, size, (LOCAL,), *leading, np.int32(row_axis), np.int32(col_axis),
+                                     voxels_buf, np.int32(start), np.int32(n), matcher.query_buffer)
+            program["project_queries"](queue, size, (LOCAL,), matcher.query_buffer, np.int32(n), basis, offset,
+                                       projected.query_buffer)
+            cl.enqueue_copy(queue, queries[start : start + n], matcher.query_buffer)
+
+        site = projected.nearest_filled(voxels.size, 1, fill)[0][:, 0]
+        return site, projection.distances(queries, site)

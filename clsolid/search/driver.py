@@ -109,7 +109,8 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
         t_iter = time.perf_counter()
         parent = coarse * math.sqrt(params.parent_weight) if use_parent else None  # as the table's parents
         for it in range(1, params.iterations + 1):
-            ctx.exhaustive = it <= params.exact_passes or _search_at(params, level) == "exact"
+            ctx.seeding = it <= params.exact_passes and _search_at(params, level) == "coherence"
+            ctx.exhaustive = ctx.seeding or _search_at(params, level) == "exact"
             if params.method == "kopf" and params.rule == "overlap":
                 searches += kopf.overlap_pass(ctx, vol, parent)
             elif params.order != "sets":

@@ -14,6 +14,7 @@ from .block import DeviceBlock
 from .features import voxel_features
 from .match import CLMatcher
 from .params import SearchParams
+from .projection import Projection
 
 
 class LevelHistogram:
@@ -93,6 +94,7 @@ class Level:
     sources: Any = None
     coherence: Any = None
     exhaustive: bool = False  # this pass searches every site even under the coherence search
+    seeding: bool = False  # ...and seeds the candidates of the passes after (exact_passes)
     codes: Any = None
 
     @cached_property
@@ -102,6 +104,21 @@ class Level:
         if not isinstance(self.matcher, CLMatcher):
             return None
         return DeviceBlock(self.matcher)
+
+    def projection(self, weights: np.ndarray) -> Projection | None:
+        """The seeding passes' principal components (``seed_components``) for *weights*, made
+        once each; None where the search compares every term (another pass, no components,
+        phase codes)."""
+        if not (self.seeding and self.params.seed_components and self.codes is None):
+            return None
+        key = weights.tobytes()
+        if key not in self._projections:
+            self._projections[key] = Projection(self.matcher.table, weights, self.params.seed_components)
+        return self._projections[key]
+
+    @cached_property
+    def _projections(self) -> dict:
+        return {}
 
     @cached_property
     def centre_bins(self) -> np.ndarray:
@@ -130,7 +147,15 @@ class Level:
         if self.coherence is not None and not self.exhaustive:
             return self.coherence.search(self.matcher, view, voxels, self.searched(vol), coarse, k, weights, queries,
                                          self.block)
-        if queries is None and self.block is not None:  # gathered on the device
+        projection = self.projection(weights)
+        if projection is not None:
+            if self.block is not None:
+                site, least = self.block.best_projected(self.params.view_names[view], voxels, self.searched(vol),
+                                                        coarse, k, projection)
+            else:
+                site, least = projection.best_reference(
+                    self.queries(view, voxels, vol, coarse) if queries is None else queries)
+        elif queries is None and self.block is not None:  # gathered on the device
             site, least = self.block.best(self.params.view_names[view], voxels, self.searched(vol), coarse, k,
                                           weights)
         else:

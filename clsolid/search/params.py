@@ -40,6 +40,8 @@ MAX_PHASES = 8
 KOPF_PARENT_WEIGHT = 4.0
 #: chen-wang's candidate set size (thesis §5.2.1, §6.3.3).
 DEFAULT_CANDIDATES = 15
+#: The principal components the coherence search's seeding passes compare (docs/choices.md).
+DEFAULT_SEED_COMPONENTS = 16
 #: kopf's anchor slices: one about every 5 voxels of each constrained view's depth, as the
 #: likelihood method's +in slices on categorical exemplars (on the gallery, 64² -> 48³, seeds
 #: 1-8, against one every 6: mirror correlations <= 0.1 in 106 runs of 120 against 99,
@@ -126,6 +128,14 @@ class SearchParams:
         24 of 24 runs against 16, hrtem's worst 0.20 against 0.64, at about twice the time
         of a 48³ volume), else 0 (``kopf``'s categorical exemplars gained nothing: C2 and
         autocorrelation a little worse); resolved by :meth:`for_exemplar`.
+    seed_components : int or None
+        ``search="coherence"`` only: the ``exact_passes`` compare each voxel with every site
+        on this many leading principal components of the level's neighbourhoods, the site
+        found there taking its distance on every term (:mod:`clsolid.search.projection`);
+        0: on every term (the exhaustive search). Squared differences only: on phase codes
+        (``distance="weighted"``) they always compare every term. None (default): 16 for
+        ``kopf`` (on the gallery's grey exemplars, 64² → 48³, seeds 1-8, the same targets met
+        as with every term, about 0.5 s faster at 64³; docs/choices.md), else 0.
     coherence_levels : int or None
         ``search="coherence"`` only: how many of the finest levels search among the
         candidates; the coarser levels search every exemplar site, and their matches seed
@@ -202,6 +212,7 @@ class SearchParams:
     candidates: int = DEFAULT_CANDIDATES
     search: str | None = None
     exact_passes: int | None = None
+    seed_components: int | None = None
     coherence_levels: int | None = None
     index_histogram: bool | None = None
     specify: bool | None = None
@@ -244,6 +255,13 @@ class SearchParams:
         if self.exact_passes and self.search != "coherence":
             raise InputError(f"exact_passes={self.exact_passes!r} seeds the coherence search: give "
                              "search='coherence' (the exact search searches every site in every pass)")
+        if self.seed_components is not None and self.search != "coherence":
+            raise InputError(f"seed_components={self.seed_components!r} is the coherence search's seeding "
+                             "passes' (exact_passes): give search='coherence'")
+        if self.search == "coherence" and self.seed_components is None:  # measured for kopf only
+            object.__setattr__(self, "seed_components", DEFAULT_SEED_COMPONENTS if self.method == "kopf" else 0)
+        if self.seed_components is not None:
+            int_in("seed_components", self.seed_components, 0, 10000)
         if self.search != "coherence":
             if self.coherence_levels is not None:
                 raise InputError(f"coherence_levels={self.coherence_levels!r} says which levels search among the "

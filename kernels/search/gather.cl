@@ -1,11 +1,13 @@
 /* The voxels' queries, gathered from the block on the device (clsolid.search.block): the
- * exhaustive search's (voxel_queries, then k_nearest of match.cl) and the coherence
- * search's (match.cl's coherence_best, built with this file before it).
+ * exhaustive search's (voxel_queries, then k_nearest of match.cl; or project_queries first,
+ * for the search on principal components) and the coherence search's (match.cl's
+ * coherence_best, built with this file before it).
  *
  * Compile-time constants:
  *   QDIM  terms of a query (KSIDE*KSIDE, or KSIDE*KSIDE + 9 with a parent level)
  *   KSIDE the square's side
  *   PARENT 1 if a coarser level's 3 x 3 square follows it, else 0
+ *   COMPONENTS (optional) principal components project_queries projects onto
  *
  * vol: the level's block (Z, Y, X) float, toroidal; coarse: the coarser block (cz, cy, cx). */
 
@@ -61,3 +63,25 @@ __kernel void voxel_queries(__global const float *vol, int vz, int vy, int vx,
     for (int d = 0; d < QDIM; ++d)
         queries[(size_t)i * QDIM + d] = xs[d];
 }
+
+#ifdef COMPONENTS
+/* out[i * COMPONENTS + p] = sum_d basis[p * QDIM + d] * queries[i * QDIM + d] - offset[p]:
+ * the queries on the leading principal components of the sites (clsolid.search.projection:
+ * the weights' square roots folded into the basis, the mean into the offset). */
+__kernel void project_queries(__global const float *queries, int n, __global const float *basis,
+                              __global const float *offset, __global float *out)
+{
+    const int i = get_global_id(0);
+    if (i >= n)
+        return;
+    float q[QDIM];
+    for (int d = 0; d < QDIM; ++d)
+        q[d] = queries[(size_t)i * QDIM + d];
+    for (int p = 0; p < COMPONENTS; ++p) {
+        float s = 0.0f;
+        for (int d = 0; d < QDIM; ++d)
+            s = fma(q[d], basis[p * QDIM + d], s);
+        out[(size_t)i * COMPONENTS + p] = s - offset[p];
+    }
+}
+#endif
