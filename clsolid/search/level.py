@@ -139,10 +139,11 @@ class Level:
     def best(self, view: int, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None,
              weights: np.ndarray, queries: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The best match of *voxels* of the block *vol* (*coarse*: the parent level's) in the
-        *view*-th constrained view: exhaustive, or among k-coherence candidates
+        *view*-th constrained view: exhaustive (in a seeding pass on :meth:`projection`'s
+        components, where it has some), or among k-coherence candidates
         (``search="coherence"``, :meth:`~clsolid.search.coherence.Coherence.search`).
-        *queries*, their neighbourhoods (:meth:`queries`), are gathered here unless given. Returns
-        ``(site (m,), distance (m,))``."""
+        *queries*, their neighbourhoods (:meth:`queries`), are gathered here (on an OpenCL
+        matcher's device: :attr:`block`) unless given. Returns ``(site (m,), distance (m,))``."""
         k = self.params.neighborhood
         if self.coherence is not None and not self.exhaustive:
             return self.coherence.search(self.matcher, view, voxels, self.searched(vol), coarse, k, weights, queries,
