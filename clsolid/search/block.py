@@ -88,12 +88,10 @@ class DeviceBlock:
         import pyopencl as cl
 
         matcher, queue = self.matcher, self.matcher.device.queue
-        projected = projection.device_matcher(matcher)
+        projected, basis, offset = projection.on_device(matcher)
         leading, voxels_buf = self.send(vol, coarse, voxels)
         program = programs.build(matcher.device, "search/gather.cl", {
             "QDIM": matcher.dim, "KSIDE": k, "PARENT": int(coarse is not None), "COMPONENTS": projection.components})
-        basis, offset = (cl.Buffer(matcher.device.context, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,
-                                   hostbuf=a) for a in projection.folded())
         row_axis, col_axis = VIEW_AXES[view]
         queries = np.empty((voxels.size, matcher.dim), np.float32)  # read back for the distances
 

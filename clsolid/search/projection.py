@@ -12,6 +12,8 @@ a third). Squared differences only (phase codes are names, not coordinates).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .match import CLMatcher, best_match_reference
@@ -40,7 +42,7 @@ class Projection:
         _, _, vt = np.linalg.svd(rows - self.mean, full_matrices=False)
         self.basis = vt[: min(components, vt.shape[0])]  # (P, dim)
         self.sites = (rows - self.mean) @ self.basis.T  # (n_sites, P)
-        self._device: CLMatcher | None = None
+        self._device: tuple | None = None
 
     @property
     def components(self) -> int:
@@ -61,11 +63,15 @@ class Projection:
         site, _ = best_match_reference(self.project(queries), self.sites)
         return site, self.distances(queries, site)
 
-    def device_matcher(self, matcher: CLMatcher) -> CLMatcher:
-        """A matcher of the projected sites on *matcher*'s device (made once), as many
-        queries a launch as *matcher*."""
+    def on_device(self, matcher: CLMatcher) -> tuple[CLMatcher, Any, Any]:
+        """On *matcher*'s device (made once): a matcher of the projected sites (as many
+        queries a launch as *matcher*) and the buffers of :meth:`folded`'s basis and offset."""
+        import pyopencl as cl
+
         if self._device is None:
-            self._device = CLMatcher(matcher.device, self.sites.astype(np.float32), max_batch=matcher.max_batch)
+            flags = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
+            self._device = (CLMatcher(matcher.device, self.sites.astype(np.float32), max_batch=matcher.max_batch),
+                            *(cl.Buffer(matcher.device.context, flags, hostbuf=a) for a in self.folded()))
         return self._device
 
     def folded(self) -> tuple[np.ndarray, np.ndarray]:
