@@ -6,7 +6,7 @@ block itself is 4 bytes a voxel."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -57,6 +57,24 @@ class DeviceBlock:
             coarse_buf, cshape = self._coarse, coarse.shape
         return (self._vol, *map(np.int32, vol.shape), coarse_buf, *map(np.int32, cshape)), self._voxels
 
+    def _gatherer(self, view: str, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None, k: int,
+                  **defines: int) -> tuple[dict, Callable[[int, int], None]]:
+        """Send the block and *voxels*, and build ``kernels/search/gather.cl`` (a small program
+        of its own: the same for every weighting and every count; *defines* added). Returns
+        its kernels and ``gather(start, n)``, which writes the queries of voxels ``start`` to
+        ``start + n`` in *view* into the matcher's :attr:`~CLMatcher.query_buffer`."""
+        matcher = self.matcher
+        leading, voxels_buf = self.send(vol, coarse, voxels)
+        program = programs.build(matcher.device, "search/gather.cl",
+                                 {"QDIM": matcher.dim, "KSIDE": k, "PARENT": int(coarse is not None), **defines})
+        axes = tuple(map(np.int32, VIEW_AXES[view]))
+
+        def gather(start: int, n: int) -> None:
+            program["voxel_queries"](matcher.device.queue, (-(-n // LOCAL) * LOCAL,), (LOCAL,), *leading, *axes,
+                                     voxels_buf, np.int32(start), np.int32(n), matcher.query_buffer)
+
+        return program, gather
+
     def best(self, view: str, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None, k: int,
              weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The exhaustive best match of *voxels* of *vol* (as the matcher compares it; *coarse*
@@ -64,19 +82,9 @@ class DeviceBlock:
         on the device: :meth:`CLMatcher.best` of
         :func:`~clsolid.search.features.voxel_features`. Returns ``(site (m,) int64,
         distance (m,) float32)``."""
-        matcher = self.matcher
-        matcher.layout(weights)
-        leading, voxels_buf = self.send(vol, coarse, voxels)
-        # a small program of its own: the same for every weighting and every count
-        gather = programs.build(matcher.device, "search/gather.cl",
-                                {"QDIM": matcher.dim, "KSIDE": k, "PARENT": int(coarse is not None)})["voxel_queries"]
-        row_axis, col_axis = VIEW_AXES[view]
-
-        def fill(start: int, n: int) -> None:
-            gather(matcher.device.queue, (-(-n // LOCAL) * LOCAL,), (LOCAL,), *leading, np.int32(row_axis),
-                   np.int32(col_axis), voxels_buf, np.int32(start), np.int32(n), matcher.query_buffer)
-
-        site, dist = matcher.nearest_filled(voxels.size, 1, fill)
+        self.matcher.layout(weights)
+        _, gather = self._gatherer(view, voxels, vol, coarse, k)
+        site, dist = self.matcher.nearest_filled(voxels.size, 1, gather)
         return site[:, 0], dist[:, 0]
 
     def best_projected(self, view: str, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None, k: int,
@@ -89,18 +97,13 @@ class DeviceBlock:
 
         matcher, queue = self.matcher, self.matcher.device.queue
         projected, basis, offset = projection.on_device(matcher)
-        leading, voxels_buf = self.send(vol, coarse, voxels)
-        program = programs.build(matcher.device, "search/gather.cl", {
-            "QDIM": matcher.dim, "KSIDE": k, "PARENT": int(coarse is not None), "COMPONENTS": projection.components})
-        row_axis, col_axis = VIEW_AXES[view]
+        program, gather = self._gatherer(view, voxels, vol, coarse, k, COMPONENTS=projection.components)
         queries = np.empty((voxels.size, matcher.dim), np.float32)  # read back for the distances
 
         def fill(start: int, n: int) -> None:
-            size = (-(-n // LOCAL) * LOCAL,)
-            program["voxel_queries"](queue, size, (LOCAL,), *leading, np.int32(row_axis), np.int32(col_axis),
-                                     voxels_buf, np.int32(start), np.int32(n), matcher.query_buffer)
-            program["project_queries"](queue, size, (LOCAL,), matcher.query_buffer, np.int32(n), basis, offset,
-                                       projected.query_buffer)
+            gather(start, n)
+            program["project_queries"](queue, (-(-n // LOCAL) * LOCAL,), (LOCAL,), matcher.query_buffer, np.int32(n),
+                                       basis, offset, projected.query_buffer)
             cl.enqueue_copy(queue, queries[start : start + n], matcher.query_buffer)
 
         site = projected.nearest_filled(voxels.size, 1, fill)[0][:, 0]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
 
@@ -96,6 +96,7 @@ class Level:
     exhaustive: bool = False  # this pass searches every site even under the coherence search
     seeding: bool = False  # ...and seeds the candidates of the passes after (exact_passes)
     codes: Any = None
+    _projections: dict = field(default_factory=dict, init=False, repr=False)  # by weights: projection()
 
     @cached_property
     def block(self) -> DeviceBlock | None:
@@ -115,10 +116,6 @@ class Level:
         if key not in self._projections:
             self._projections[key] = Projection(self.matcher.table, weights, self.params.seed_components)
         return self._projections[key]
-
-    @cached_property
-    def _projections(self) -> dict:
-        return {}
 
     @cached_property
     def centre_bins(self) -> np.ndarray:

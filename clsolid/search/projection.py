@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .match import CLMatcher, best_match_reference
+from .match import CLMatcher, best_match_reference, candidate_distances_reference
 
 
 class Projection:
@@ -54,8 +54,7 @@ class Projection:
 
     def distances(self, queries: np.ndarray, sites: np.ndarray) -> np.ndarray:
         """The weighted squared distance, on every term, of each query to its site (float32)."""
-        d = np.asarray(queries, np.float64) - self.table[sites]
-        return (d * d @ self.weights).astype(np.float32)
+        return candidate_distances_reference(queries, self.table, sites[:, None], self.weights)[:, 0].astype(np.float32)
 
     def best_reference(self, queries: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The float64 reference: each query's site nearest on the components (the lowest
