@@ -322,12 +322,20 @@ def _skimage_texture(name: str) -> Callable[[int, np.random.Generator | None], n
     return make
 
 
-def _tissue(size: int, rng: np.random.Generator | None) -> np.ndarray:
+#: The tissue exemplar's quarter of scikit-image's 512^2 IHC image: rows 256-512, columns 128-384.
+_TISSUE_CROP = (slice(256, 512), slice(128, 384))
+
+
+def _tissue_grey() -> np.ndarray:
+    """The whole 512^2 IHC image in grey (luminance on 0..255), float64."""
     import skimage.color
     import skimage.data
 
-    rgb = skimage.data.immunohistochemistry()[256:512, 128:384]
-    grey = skimage.color.rgb2gray(rgb) * 255.0
+    return skimage.color.rgb2gray(skimage.data.immunohistochemistry()) * 255.0
+
+
+def _tissue(size: int, rng: np.random.Generator | None) -> np.ndarray:
+    grey = _tissue_grey()[_TISSUE_CROP]
     return np.clip(np.round(_area_downscale(grey, size)), 0, 255).astype(np.uint8)
 
 
@@ -437,6 +445,43 @@ def gallery_exemplar(name: str, size: int = 64) -> np.ndarray:
     size = _check_int(size, "size", MIN_SIZE, MAX_SIZE, f"the gallery is meant at sizes {SIZES}")
     rng = None if entry.seed is None else np.random.default_rng(entry.seed)
     return entry._make(size, rng)
+
+
+def gallery_photograph(name: str, size: int = 64) -> np.ndarray:
+    """The whole photograph a photographed exemplar was cut from, at that exemplar's scale.
+
+    brick, grass and gravel are the top-left 256^2 quarter of a 512^2 scikit-image
+    photograph, tissue another 256^2 quarter of one; each is area-averaged to ``size``.
+    The whole photograph averaged alike is ``2 size`` square and holds more of the same
+    wall, lawn or tissue: its windows show what the material itself scores
+    (``tools/photo_windows.py``), the level a synthesis cannot be asked to beat.
+
+    Parameters
+    ----------
+    name : {"brick", "grass", "gravel", "tissue"}
+        A photographed exemplar (``gallery_info(name).seed`` is None).
+    size : int, default 64
+        The exemplar's side, as for :func:`gallery_exemplar`.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(2 size, 2 size)`` float64 on 0..255, not rounded; the exemplar, before its
+        rounding to uint8, is one quarter of it (top-left for the textures, rows ``size``
+        to ``2 size`` and columns ``size / 2`` to ``3 size / 2`` for tissue).
+
+    Raises
+    ------
+    InputError
+        Unknown or generated ``name``, or ``size`` out of range.
+    """
+    entry = gallery_info(name)
+    if entry.seed is not None:
+        raise InputError(f"{name!r} is generated, not photographed; gallery_draw gives new pieces of it")
+    size = _check_int(size, "size", MIN_SIZE, MAX_SIZE, f"the gallery is meant at sizes {SIZES}")
+    if name == "tissue":
+        return _area_downscale(_tissue_grey(), 2 * size)
+    return builtin_exemplar(name, size=2 * size, region=512)
 
 
 def gallery_draw(name: str, size: int = 64, draw: int = 1) -> np.ndarray:

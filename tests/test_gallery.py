@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from clsolid.errors import InputError
-from clsolid.gallery import SIZES, gallery_draw, gallery_exemplar, gallery_info, gallery_names
+from clsolid.gallery import SIZES, gallery_draw, gallery_exemplar, gallery_info, gallery_names, gallery_photograph
 from clsolid.metrics import (match_counts, max_copy_fraction, mirror_chance, mirror_correlation,
                              mirror_correlations)
 
@@ -223,6 +223,17 @@ def test_random_volume_copies_little():
     rng = np.random.default_rng(4)
     m = max_copy_fraction(rng.integers(0, 16, (16, 16, 16)), rng.integers(0, 16, (16, 16)))
     assert m.fraction < 0.25
+
+
+@pytest.mark.parametrize("name, rows, cols", [("brick", 0, 0), ("tissue", 64, 32)])
+def test_a_photograph_holds_its_exemplar_as_one_quarter(name, rows, cols):
+    photo = gallery_photograph(name, 64)
+    assert photo.shape == (128, 128) and photo.dtype == np.float64
+    quarter = np.clip(np.round(photo[rows: rows + 64, cols: cols + 64]), 0, 255)
+    np.testing.assert_array_equal(quarter, gallery_exemplar(name, 64))  # the exemplar, cut where it was
+    assert np.mean(np.abs(photo[:64, 64:] - photo[64:, :64])) > 5  # the rest is more of it, not a copy
+    with pytest.raises(InputError, match="generated"):
+        gallery_photograph("porous50")
 
 
 def test_a_draw_is_another_sample_of_the_same_material():

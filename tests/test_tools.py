@@ -269,9 +269,10 @@ def test_photo_windows_stay_inside_the_photograph_and_are_scored(capsys, tool):
     np.testing.assert_array_equal(stack, [photo[i: i + 16, j: j + 16] for i, j in zip(r, c)])  # never wrapped
     away = photo_windows.windows(photo, 16, 50, seed=3, away=True)
     assert (np.divmod(away[:, 0, 0], 40)[0] >= 20).all()
-    photo_windows.main(["--names", "gravel", "--sides", "24", "--seeds", "1"])
-    row = capsys.readouterr().out.splitlines()[-1].split("|")
-    assert row[1].strip() == "gravel" and row[2].strip() == "24²" and abs(float(row[5])) < 1.0
+    photo_windows.main(["--names", "gravel", "tissue", "--sides", "24", "--seeds", "1"])
+    rows = [line.split("|") for line in capsys.readouterr().out.splitlines()[-2:]]
+    assert [r[1].strip() for r in rows] == ["gravel", "tissue"] and rows[0][2].strip() == "24²"
+    assert abs(float(rows[0][5])) < 1.0 and abs(float(rows[1][6])) < 1.0  # gravel's patch, tissue's autocorrelation
 
 
 def test_material_windows_of_a_generated_exemplar_come_from_new_draws(capsys, tool):

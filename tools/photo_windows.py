@@ -2,9 +2,11 @@
 or of new draws of a generated exemplar's material.
 
 brick, grass and gravel are the top-left quarter of a scikit-image photograph (512^2),
-area-averaged 4x to 64^2. The whole photograph at that scale (128^2) holds more of the same
-wall or lawn: windows of it, of a volume's slice size, at seeded offsets that stay inside it,
-are stacked like a volume's front slices and scored against the 64^2 exemplar with
+tissue another quarter of one, area-averaged 4x to 64^2. The whole photograph at that
+scale (128^2, ``clsolid.gallery.gallery_photograph``) holds more of the same wall, lawn or
+tissue: windows of it, of a volume's slice size, at seeded offsets that stay inside it,
+rounded as the exemplar is, are stacked like a volume's front slices and scored against
+the 64^2 exemplar with
 ``clsolid.metrics.evaluate``, as tools/gallery.py scores a volume. Their scores are what
 the material itself gets from the metrics, the level a synthesis cannot be asked to beat
 (windows from the exemplar's own quarter overlap it; ``--away`` keeps them to the other
@@ -17,7 +19,7 @@ voxels apart show the same features, so a stack of 16 of its slices holds only a
 independent pieces of material: 4 draws (the default) stands for that, 16 for slices that
 are all independent.
 
-    python tools/photo_windows.py                       # brick, grass, gravel; 48^2 and 96^2 windows
+    python tools/photo_windows.py                       # brick, grass, gravel, tissue; 48^2 and 96^2
     python tools/photo_windows.py --names brick --sides 48 --seeds 1 2 3
     python tools/photo_windows.py --names composite3 fibres --size 128 --sides 64   # new draws
 """
@@ -30,11 +32,12 @@ import sys
 import numpy as np
 
 from clsolid import metrics
-from clsolid.exemplar import BUILTINS, builtin_exemplar
-from clsolid.gallery import gallery_draw, gallery_exemplar, gallery_info, gallery_names
+from clsolid.gallery import gallery_draw, gallery_exemplar, gallery_info, gallery_names, gallery_photograph
 
 #: The gallery's exemplars that have a generator to draw again.
 GENERATED = tuple(n for n in gallery_names() if gallery_info(n).seed is not None)
+#: The gallery's exemplars cut from a photograph.
+PHOTOGRAPHED = tuple(n for n in gallery_names() if gallery_info(n).seed is None)
 
 #: The scores printed: (key in clsolid.metrics.evaluate's summary, column title).
 SCORES = (("histogram_kl", "hist"), ("patch_sw", "patch"), ("autocorrelation_l2", "autocorr"), ("s2_l2", "S2"),
@@ -73,11 +76,11 @@ def scores(exemplar: np.ndarray, stack: np.ndarray) -> dict[str, float]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--names", nargs="+", default=list(BUILTINS), choices=BUILTINS + GENERATED)
+    ap.add_argument("--names", nargs="+", default=list(PHOTOGRAPHED), choices=PHOTOGRAPHED + GENERATED)
     ap.add_argument("--sides", nargs="+", type=int, default=[48, 96], help="window sides (a volume's slice size)")
     ap.add_argument("--seeds", nargs="+", type=int, default=[1, 2])
     ap.add_argument("--away", action="store_true", help="windows from the quarter farthest from the exemplar")
-    ap.add_argument("--size", type=int, default=64, help="generated exemplars: the exemplar's side (64 or 128)")
+    ap.add_argument("--size", type=int, default=64, help="the exemplar's side (64 or 128; a photograph is twice it)")
     ap.add_argument("--draws", type=int, default=4, help="generated exemplars: new draws a stack's windows come from")
     args = ap.parse_args(argv)
     if not 1 <= args.draws <= COUNT:
@@ -86,11 +89,9 @@ def main(argv: list[str] | None = None) -> int:
     print("|---|---|---|" + "---|" * len(SCORES))
     for name in args.names:
         generated = name in GENERATED
-        if generated:
-            exemplar = gallery_exemplar(name, args.size)
-        else:
-            exemplar = builtin_exemplar(name, size=64)
-            photo = builtin_exemplar(name, size=128, region=512)  # the whole photograph at the exemplar's scale
+        exemplar = gallery_exemplar(name, args.size)
+        if not generated:  # the whole photograph at the exemplar's scale, rounded as the exemplar is
+            photo = np.clip(np.round(gallery_photograph(name, args.size)), 0, 255).astype(np.uint8)
         for side in args.sides:
             if generated and side > args.size:
                 ap.error(f"a window of {side} does not fit a draw of {args.size}")
