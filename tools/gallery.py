@@ -4,8 +4,10 @@ Grows one cube per exemplar and seed, then measures, with clsolid.metrics: the l
 phase-fraction error (percentage points, categorical exemplars), the calibrated
 histogram, patch, autocorrelation and (categorical) S2 and C2 (two-point cluster) scores in
 the front, right and top views (0: as close as two halves of the exemplar, 1: no structure), the mirror
-correlation (x <-> z with 2 views; every pair of axes with 3), the largest fraction of
-any slice identical to a shifted window of the exemplar, and the time. Writes, in OUTDIR:
+correlation (x <-> z with 2 views; every pair of axes with 3), the stretch (how much taller
+than wide the features are in the constrained views, against the exemplar; the y axis the
+two views share makes them tall), the largest fraction of any slice identical to a shifted
+window of the exemplar, and the time. Writes, in OUTDIR:
 gallery.md (a table and how many exemplars meet each target), gallery.json (every
 number) and montage.png (each exemplar beside a front, right and top slice taken away
 from the +in slices). With several seeds every cell shows the worst seed, and the targets
@@ -57,6 +59,7 @@ TARGETS = (
 #: Yardsticks of our own, counted the same way but not targets of issue 10.
 YARDSTICKS = (
     ("c2_l2", "connectedness C2 <= 0.3 (not an issue target)", 0.3, False),
+    ("stretch", "stretch within 1.25x (not an issue target)", 1.25, False),
 )
 REFERENCE_REPEATS = 3
 #: Smallest long side, in pixels, of a montage panel.
@@ -103,10 +106,12 @@ def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
     pairs = [(0, 2)] if params["views"] == 2 else AXIS_PAIRS
     mirror = metrics.mirror_correlations(vol, pairs)
     copy = metrics.max_copy_fraction(vol, ex, VIEWS)
+    stretch = metrics.stretch(ex, vol, constrained)
     out: dict[str, Any] = {
         "seconds": seconds, "constrained": list(constrained), "scores": scores,
         "mirror": mirror, "mirror_max": max((r for r in mirror.values() if np.isfinite(r)), default=None),
         "mirror_chance": metrics.mirror_chance(ex, min(vol.shape)),
+        "stretch": stretch, "stretch_max": _farthest_from_one(stretch.values()),
         "copy": {"fraction": copy.fraction, "view": copy.view, "index": copy.index, "shift": list(copy.shift),
                  "inserted": bool(copy.index in slices[copy.view]), "chance": copy_chance(ex, min(vol.shape))},
         "inserted_depths": {v: d.tolist() for v, d in slices.items()},
@@ -141,6 +146,17 @@ def _worst(values: list) -> float | None:
     return max(defined) if defined else None
 
 
+def _factor(ratio: float) -> float:
+    """How far a ratio is from 1, as a factor either way: 0.5 and 2 both give 2, 0 and inf give inf."""
+    return float("inf") if ratio in (0.0, float("inf")) else max(ratio, 1.0 / ratio)
+
+
+def _farthest_from_one(ratios: Any) -> float | None:
+    """The ratio farthest from 1 by its factor (0.5 and 2 are as far), None if none is known."""
+    known = [r for r in ratios if r is not None and not np.isnan(r)]
+    return max(known, key=_factor) if known else None
+
+
 def summarise(runs: list[dict]) -> dict[str, Any]:
     """One exemplar's runs (seeds) reduced to their worst value for every number."""
     first = runs[0]
@@ -149,6 +165,7 @@ def summarise(runs: list[dict]) -> dict[str, Any]:
         "scores": {v: {k: _worst([r["scores"][v][k] for r in runs]) for k, _ in SCORES} for v in VIEWS},
         "mirror": _worst([r["mirror_max"] for r in runs]),
         "mirror_chance": first["mirror_chance"],
+        "stretch": _farthest_from_one([r.get("stretch_max") for r in runs]),  # gallery.json before it: None
         "copy": max((r["copy"] for r in runs), key=lambda c: c["fraction"]),
         "seconds": float(np.mean([r["seconds"] for r in runs])),
         "constrained": first["constrained"],
@@ -164,6 +181,8 @@ def meets(row: dict, key: str, limit: float, strict: bool) -> bool | None:
         value = max(values)
     elif key == "copy":
         value = row["copy"]["fraction"]
+    elif key == "stretch":  # a factor either way
+        value = None if row["stretch"] is None else _factor(row["stretch"])
     else:
         value = row[key]
     if value is None:
@@ -172,7 +191,7 @@ def meets(row: dict, key: str, limit: float, strict: bool) -> bool | None:
 
 
 def _fmt(x: float | None, digits: int = 2) -> str:
-    return "–" if x is None else f"{x:.{digits}f}"
+    return "–" if x is None else "∞" if x == float("inf") else f"{x:.{digits}f}"
 
 
 def target_counts(rows: dict[str, dict]) -> list[tuple[str, str, str]]:
@@ -202,14 +221,17 @@ def markdown(rows: dict[str, dict], settings: dict, runs: dict[str, list[dict]] 
         "percentage points. Mirror: correlation with the x↔z mirror after removing each y-plane's "
         "mean (the largest over axis pairs with 3 views), and in brackets the level an isotropic "
         "material with the exemplar's autocorrelation would give (a voxel near the plane z = x is "
-        "close to its mirror voxel). Copy: largest fraction of a slice equal to a "
-        "shifted exemplar window, with the slice (view and depth; +in: an inserted slice) and, in "
+        "close to its mirror voxel). Stretch: in the constrained view where it is farthest from 1, "
+        "the features' height-to-width ratio (correlation lengths along y and across) over the "
+        "exemplar's: above 1, taller than the exemplar's; ∞: longer along y than half the volume's "
+        "side. Copy: largest fraction of a slice equal to a shifted exemplar window, with the slice "
+        "(view and depth; +in: an inserted slice) and, in "
         "brackets, its chance level: a window of the exemplar's lower half against its upper half."
         + (" Each cell is the worst seed; time is the mean." if len(settings["seeds"]) > 1 else ""),
         "",
         "| exemplar | kind | phase err | " + " | ".join(f"{title} F/R/T" for _, title in SCORES)
-        + " | mirror | copy | time (s) |",
-        "|---" * (6 + len(SCORES)) + "|",
+        + " | mirror | stretch | copy | time (s) |",
+        "|---" * (7 + len(SCORES)) + "|",
     ]
     for name, row in rows.items():
         info = gallery_info(name)
@@ -219,7 +241,8 @@ def markdown(rows: dict[str, dict], settings: dict, runs: dict[str, list[dict]] 
         copy = (f"{c['fraction']:.2f} {c['view'][0].upper()}{c['index']}{' +in' if c['inserted'] else ''} "
                 f"({c['chance']:.2f})")
         lines.append(f"| {name} | {kind} | {_fmt(row['phase_error_pp'], 1)} | " + " | ".join(cells)
-                     + f" | {_fmt(row['mirror'])} ({_fmt(row['mirror_chance'])}) | {copy} | {row['seconds']:.1f} |")
+                     + f" | {_fmt(row['mirror'])} ({_fmt(row['mirror_chance'])}) | {_fmt(row['stretch'])} | {copy} "
+                     f"| {row['seconds']:.1f} |")
     lines += ["", "Targets met (scores in the constrained views"
               + ("; every exemplar's worst seed):" if len(settings["seeds"]) > 1 else "):"), ""]
     lines += [f"- {label}: {count}{unjudged}" for label, count, unjudged in target_counts(rows)]
@@ -346,6 +369,7 @@ def main(argv: list[str] | None = None) -> int:
             c = run["copy"]
             print(f"{name} seed {seed}: {run['seconds']:.1f} s synthesis, {time.perf_counter() - t:.1f} s in all; "
                   f"phase err {_fmt(run['phase_error_pp'], 1)} pp, mirror {_fmt(run['mirror_max'])}, "
+                  f"stretch {_fmt(run['stretch_max'])}, "
                   f"copy {c['fraction']:.2f} ({c['view']} {c['index']})", file=sys.stderr, flush=True)
     write_report(args.outdir, settings, runs)
     montage(args.outdir / "montage.png", rows_for_montage)

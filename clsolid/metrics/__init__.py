@@ -6,12 +6,14 @@ Views of a (Z, Y, X) volume: ``front`` = the (y, x) planes ``volume[z]``; ``righ
 each distance with a floor (two halves of the exemplar) and a ceiling (shuffled pixels or
 noise), and says where a distance cannot tell these apart. :func:`mirror_correlation` and
 :func:`max_copy_fraction` catch what slice statistics miss: a volume mirrored across the
-views' shared axis, and slices copied from the exemplar. The building blocks are public
+views' shared axis, and slices copied from the exemplar; :func:`stretch`, features drawn out
+along that axis. The building blocks are public
 so that tests and the engine can use them directly.
 """
 
 from ._common import VIEWS, symmetric_kl, view_slices, wasserstein_1d
 from .autocorr import autocorrelation, autocorrelation_distance
+from .axes import correlation_length, correlation_lengths, lag_correlations, stretch
 from .evaluate import evaluate
 from .firstorder import first_order_stats, histogram_distance, quantise
 from .fringes import Fringes, fringe_distances, trace_fringes
@@ -29,5 +31,5 @@ __all__ = [
     "dominant_orientation_deg", "orientation_distance", "trace_fringes", "Fringes",
     "fringe_distances", "patch_distance", "volume_fractions", "two_point_correlation", "two_point_cluster",
     "lineal_path", "chord_lengths", "mirror_correlation", "mirror_correlations", "mirror_chance", "max_copy_fraction",
-    "CopyMatch", "match_counts",
+    "CopyMatch", "match_counts", "lag_correlations", "correlation_length", "correlation_lengths", "stretch",
 ]
