@@ -38,7 +38,8 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
                "slice_layout", "initial_temperature", "bandwidth", "bandwidth_factor", "relaxation",
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
                "prune_similar", "prune_sample", "prune_min_weight", "prune_projected",
-               "prune_projected_k", "prune_projected_probe", "prune_projected_sweeps", "falloff", "parent_weight",
+               "prune_projected_k", "prune_projected_probe", "prune_projected_sweeps", "falloff", "shared_weight",
+               "parent_weight",
                "parent_min_side", "region")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client", "scratch")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
@@ -151,9 +152,11 @@ def synthesize(
     The defaults depart from the published method where the gallery of exemplars
     (``tools/gallery.py``) showed it fails: Gibbs draws instead of ICM's argmax, a
     label-histogram balance, dense, staggered ``+in`` slices and, on categorical
-    exemplars, phase mismatches instead of squared differences. ``relaxation="icm",
-    balance=0, slice_layout="aligned", insert_slices=4, distance="squared"`` (with
-    ``bandwidth_factor=1, pyramid="decimate"``) is the thesis's form. See docs/choices.md.
+    exemplars, phase mismatches instead of squared differences and no window terms on
+    the axis the views share. ``relaxation="icm", balance=0, slice_layout="aligned",
+    insert_slices=4, distance="squared", falloff=0, seam_gap=0, parent_weight=0,
+    shared_weight=1`` (with ``bandwidth_factor=1, pyramid="decimate"``) is the thesis's
+    form (the likelihood presets of ``clsolid.presets`` use it). See docs/choices.md.
 
     Parameters
     ----------
@@ -283,7 +286,10 @@ def synthesize(
         thesis uses 1: see the README, Quality), ``falloff`` (the sigma, in pixels of each
         scale, of a Gaussian weight on each neighbourhood term by its distance from the
         centre; default 3 for grey exemplars, 0 for categorical ones; 0 = every term alike,
-        the thesis: docs/choices.md), ``parent_weight`` (each of the coarser scale's 3 x 3
+        the thesis: docs/choices.md), ``shared_weight`` (the weight of the window terms on
+        the axis the constrained views share, the voxels above and below a voxel, which both
+        views' windows hold; default 0 for categorical exemplars with 2 views, else 1; 1 =
+        every term alike, the thesis: docs/choices.md), ``parent_weight`` (each of the coarser scale's 3 x 3
         parent terms, added to every neighbourhood of the scales whose coarser exemplar is
         at least ``parent_min_side`` pixels on its shorter side (default 64), weighs this
         against 1 for a term of the window; default 4 for categorical exemplars, 0 for grey

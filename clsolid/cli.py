@@ -210,6 +210,10 @@ def _add_synth(sub) -> None:
                    help="Gaussian weight of each neighbourhood term by its distance from the centre, this "
                         "sigma in pixels of each scale (default: 3 for grey exemplars, 0 for categorical "
                         "ones); 0 = every term alike, the thesis")
+    p.add_argument("--shared-weight", type=float, default=d.shared_weight, metavar="W",
+                   help="weight of the window terms on the axis the constrained views share (the voxels above "
+                        "and below, in both views' windows; default: 0 for categorical exemplars with 2 views, "
+                        "else 1); 1 = every term alike, the thesis")
     p.add_argument("--region", type=int, default=d.region, metavar="N",
                    help="ml: visit the block region by region, cubes of at most N voxels, every set of one before "
                         "the next (another visiting order; README, Using it): with --scratch and --tile N, each "
@@ -354,7 +358,8 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
             "prune_similar", "prune_sample", "prune_min_weight", "prune_projected", "prune_projected_k",
-            "prune_projected_probe", "prune_projected_sweeps", "falloff", "parent_min_side", "region", "tile",
+            "prune_projected_probe", "prune_projected_sweeps", "falloff", "shared_weight", "parent_min_side", "region",
+            "tile",
             "scratch", "scheduler", "workers", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram",
             "candidates", "specify", "search", "exact_passes", "seed_components", "coherence_levels", "index_histogram",
@@ -427,7 +432,8 @@ def _ml_options(args) -> dict:
                    prune_min_weight=args.prune_min_weight, prune_projected=args.prune_projected,
                    prune_projected_k=args.prune_projected_k, prune_projected_probe=args.prune_projected_probe,
                    prune_projected_sweeps=args.prune_projected_sweeps,
-                   falloff=args.falloff, parent_min_side=args.parent_min_side, region=args.region)
+                   falloff=args.falloff, shared_weight=args.shared_weight, parent_min_side=args.parent_min_side,
+                   region=args.region)
     if args.parent_weight is not None:
         options["parent_weight"] = args.parent_weight
     if args.tile is not None:

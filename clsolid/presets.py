@@ -19,7 +19,7 @@ from .errors import InputError
 _ML_THESIS = dict(relaxation="icm", balance=0.0, bandwidth_factor=1.0, pyramid="decimate",
                   slice_layout="aligned", xi=-3.0, stop_fraction=0.95, heuristic="h2-product",
                   likelihood="exact", distance="squared", falloff=0.0, seam_gap=0,
-                  parent_weight=0.0)
+                  parent_weight=0.0, shared_weight=1.0)
 _NP_ORDER = ("the thesis visits voxels in a random scan; clsolid updates conflict-free sets in a "
              "seeded order (order='random' is the sequential random scan, for small blocks)")
 _NP_K = ("k = 15 is NP_CW's candidate set (method='chen-wang', candidates=15); NP_K's search here is "

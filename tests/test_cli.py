@@ -105,6 +105,8 @@ def test_same_seed_same_file(tmp_path, device):
     (["--seam-gap", "0"], "seam_gap", 0),
     ([], "falloff", 3.0),  # brick is grey: auto weighs the terms by a Gaussian of sigma 3
     (["--falloff", "0"], "falloff", 0.0),
+    ([], "shared_weight", 1.0),  # brick is grey: every term alike
+    (["--shared-weight", "0.25"], "shared_weight", 0.25),
     ([], "region", 0),  # set by set over the whole block
     (["--region", "6"], "region", 6),
 ])

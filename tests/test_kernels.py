@@ -4,6 +4,9 @@ import numpy as np
 import pytest
 from conftest import random_state
 
+import clsolid
+from clsolid.errors import InputError
+from clsolid.gallery import gallery_exemplar
 from clsolid.ml.opencl import CLBackend, group_tables, kernel_tables
 from clsolid.ml.model import build_scale
 from clsolid.ml.params import MLParams
@@ -19,13 +22,14 @@ def _pair(device, labels_img, shape, vol, temp, **kw):
     return model, cl_b, ref
 
 
-@pytest.mark.parametrize("k, views, distance, falloff", [
-    (3, 2, "squared", 0), (5, 3, "squared", 0), (7, 2, "squared", 0), (11, 2, "squared", 0), (5, 3, "mismatch", 0),
-    (11, 2, "mismatch", 0), (5, 3, "weighted", 0), (11, 2, "weighted", 0),
-    (11, 2, "squared", 3.0), (5, 3, "squared", 1.0), (7, 2, "mismatch", 2.0), (5, 3, "weighted", 1.5)])
-def test_per_label_log_lcpdf_matches_reference(device, small_labels, k, views, distance, falloff):
+@pytest.mark.parametrize("k, views, distance, falloff, shared", [
+    (3, 2, "squared", 0, 1), (5, 3, "squared", 0, 1), (7, 2, "squared", 0, 1), (11, 2, "squared", 0, 1),
+    (5, 3, "mismatch", 0, 1), (11, 2, "mismatch", 0, 1), (5, 3, "weighted", 0, 1), (11, 2, "weighted", 0, 1),
+    (11, 2, "squared", 3.0, 1), (5, 3, "squared", 1.0, 1), (7, 2, "mismatch", 2.0, 1), (5, 3, "weighted", 1.5, 1),
+    (11, 2, "weighted", 0, 0), (7, 2, "squared", 2.0, 0.5), (5, 3, "mismatch", 0, 0)])
+def test_per_label_log_lcpdf_matches_reference(device, small_labels, k, views, distance, falloff, shared):
     shape = (7, 9, 11)
-    params = dict(neighborhood=k, views=views, scales=1, distance=distance, falloff=falloff)
+    params = dict(neighborhood=k, views=views, scales=1, distance=distance, falloff=falloff, shared_weight=shared)
     model = build_scale(small_labels, shape, MLParams(**params), 0)
     vol, temp = random_state(model)
     model, cl_b, ref = _pair(device, small_labels, shape, vol, temp, **params)
@@ -100,6 +104,49 @@ def test_falloff_weighs_each_term_by_its_gaussian(small_labels):
             one.patches = model.patches[r:r + 1]
             want += g[r] * site_distances(one, vol, temp, voxels, view)
         np.testing.assert_allclose(site_distances(model, vol, temp, voxels, view), want, rtol=1e-10)
+
+
+@pytest.mark.parametrize("views, lines", [(2, ["column"]), (3, ["column", "row"])])
+def test_the_shared_terms_are_the_voxels_two_views_hold(small_labels, views, lines):
+    """With front and right the voxels above and below (a view's centre column, dc = 0) are in
+    both windows; with the top view too, each view's centre row as well. shared_weight weighs
+    them, the other terms 1, all scaled to a mean of 1, on top of the fall-off."""
+    from clsolid.ml.model import falloff_weights, shared_terms
+
+    shape = (6, 7, 8)
+    model = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, views=views, falloff=0), 0)
+    assert model.term_weight is None  # shared_weight None reaches build_scale as 1: every term alike
+    dr, dc = np.divmod(np.delete(np.arange(25), 12), 5)
+    dr, dc = dr - 2, dc - 2  # each term's (row, column) offset in its view, row-major, centre left out
+    want = np.zeros(24, bool)
+    want |= dc == 0 if "column" in lines else False
+    want |= dr == 0 if "row" in lines else False
+    np.testing.assert_array_equal(shared_terms(model.offsets), want)
+    for v in range(views):  # the very voxels: each shared term's offset is in another view's window
+        others = {tuple(o) for w in range(views) if w != v for o in model.offsets[w]}
+        assert [tuple(o) in others for o in model.offsets[v]] == want.tolist()
+    left_out = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, views=views, shared_weight=0), 0)
+    w = left_out.term_weight
+    assert (w[want] == 0).all() and np.allclose(w[~want], 24 / np.sum(~want)) and w.mean() == pytest.approx(1)
+    both = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, views=views, falloff=1.5,
+                                                     shared_weight=0.5), 0).term_weight
+    g = falloff_weights(model.offsets[0], 1.5) * np.where(want, 0.5, 1.0)
+    np.testing.assert_allclose(both, g / g.mean(), rtol=1e-12)
+
+
+@pytest.mark.parametrize("name, views, given, want", [("composite3", 2, None, 0.0), ("composite3", 3, None, 1.0),
+                                                      ("brick", 2, None, 1.0), ("composite3", 2, 0.5, 0.5)])
+def test_auto_shared_weight_on_categorical_exemplars_with_two_views(device, name, views, given, want):
+    res = clsolid.synthesize(gallery_exemplar(name, 64), (8, 8, 8), rng=1, device=device, scales=1, neighborhood=3,
+                             views=views, max_sweeps=1, full_output=True,
+                             **({} if given is None else {"shared_weight": given}))
+    assert res.params["shared_weight"] == want
+
+
+@pytest.mark.parametrize("bad", [-0.5, 1.5, float("nan"), "0", True])
+def test_bad_shared_weight_is_refused(bad):
+    with pytest.raises(InputError, match="shared_weight"):
+        MLParams(shared_weight=bad)
 
 
 def test_group_tables_cover_every_site_once(small_labels):

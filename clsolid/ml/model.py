@@ -11,7 +11,8 @@ site's centre value and y_{p,r} its neighbour r. The constant 1/(n h^d) cancels 
 every heuristic and is dropped. With ``distance="mismatch"`` every squared difference
 (a - b)^2 above is [a != b] instead, with ``"weighted"`` [a != b] (c_a + c_b)
 (:func:`difference`, :func:`phase_costs`), and the bandwidth is taken in those units
-(:func:`phase_sigma`). A fall-off weighs each term (:func:`falloff_weights`); with
+(:func:`phase_sigma`). A fall-off weighs each term (:func:`falloff_weights`), the terms two views
+share another weight (:func:`term_weights`); with
 ``parent_weight`` > 0 the sum over r also runs over the coarser scale's 3 x 3 around the
 parent, at t = 0, each term times that weight (:func:`parent_tables`, :func:`parent_block`).
 """
@@ -157,6 +158,25 @@ def falloff_weights(offsets: np.ndarray, sigma: float) -> np.ndarray | None:
         return None
     g = np.exp(-np.sum(offsets.astype(np.float64) ** 2, axis=1) / (2.0 * sigma**2))
     return g / g.mean()
+
+
+def shared_terms(offsets: np.ndarray) -> np.ndarray:
+    """``(R,)`` whether each term of the first view's window, in *offsets* ``(V, R, 3)``, is a
+    voxel that another view's window holds too: the line along the axis two views share (y
+    for front and right; with three views every view's centre row and column). Each view's
+    terms pair alike (row-major (dr, dc)), so the same terms are shared in every view."""
+    others = {tuple(o) for v in offsets[1:] for o in v}
+    return np.array([tuple(o) in others for o in offsets[0]], dtype=bool)
+
+
+def term_weights(offsets: np.ndarray, sigma: float, shared: float) -> np.ndarray | None:
+    """``(R,)`` weight of each window term: the fall-off's (:func:`falloff_weights`), times
+    *shared* on the :func:`shared_terms`, scaled to a mean of 1; None when every term weighs 1."""
+    g = falloff_weights(offsets[0], sigma)
+    if shared == 1.0:
+        return g
+    w = (np.ones(offsets.shape[1]) if g is None else g) * np.where(shared_terms(offsets), shared, 1.0)
+    return w / w.mean()
 
 
 def silverman(sigma: float, n: int, d: int) -> float:
@@ -312,7 +332,8 @@ def build_scale(
     offsets = np.stack([view_offsets(v, half) for v in params.view_names])
     union = np.unique(offsets.reshape(-1, 3), axis=0)  # the temperatures' neighbours: no parent terms
     sshape = scale_shape(shape, level)
-    weight = falloff_weights(offsets[0], params.falloff or 0.0)  # every view's rows pair alike
+    weight = term_weights(offsets, params.falloff or 0.0,  # every view's rows pair alike
+                          1.0 if params.shared_weight is None else float(params.shared_weight))
     parents = 0
     coarse = None
     if params.parent_weight and level < params.scales - 1:  # the coarsest scale has no parent

@@ -64,6 +64,14 @@ DEFAULT_BANDWIDTH_FACTOR = 0.2
 # (4 of 6 seeds within 0.3 either way); on categorical ones it moved nothing to the better
 # (fibres' autocorrelation 0.13 -> 0.32, copies up), so they keep 0 (docs/choices.md).
 GREY_FALLOFF = 3.0
+# The window terms on the axis two constrained views share (shared_weight=None: by the
+# exemplar). The voxels straight above and below a voxel lie in both views' windows, so
+# with every term alike they count twice, and features grow taller than wide (the stretch,
+# clsolid.metrics.stretch: 1.2-2.3 on the categorical gallery). Left out on categorical
+# exemplars with two views: over seeds 1-6 the stretch falls to 1.1-1.5, copies and
+# connectedness rise, the rest alike; grey ones keep them (hrtem's fringes and brick's
+# courses lose their spacing without: autocorrelation 0.53-0.86 and 0.33-0.44; docs/choices.md).
+CATEGORICAL_SHARED_WEIGHT = 0.0
 # The coarser scale's 3 x 3 parent terms (parent_weight=None: by the exemplar). On categorical
 # exemplars each weighs 4 against 1 for a window term, at the scales whose coarser exemplar has
 # at least PARENT_MIN_SIDE pixels on its shorter side: at 128^2 -> 64^3 (ten categorical gallery
@@ -168,6 +176,9 @@ class MLParams:
     falloff: float | None = None  # None: by the exemplar (for_exemplar); 0: uniform terms (the thesis)
     parent_weight: float | None = None  # each parent term's weight; None: by the exemplar; 0: none (the thesis)
     parent_min_side: int = PARENT_MIN_SIDE  # parent terms where the coarser exemplar is at least this wide
+    # each window term on a line through the voxel that another constrained view's window holds too;
+    # None: by the exemplar (for_exemplar); 1: as any term (the thesis; a checkpoint older than it, as it ran)
+    shared_weight: float | None = None
     # (a checkpoint older than the fall-off has no such key: None reaches build_scale, which takes 0, as it ran)
     relaxation: str = "gibbs"
     anneal_start: float = 1.0
@@ -238,6 +249,9 @@ class MLParams:
             raise InputError(f"parent_weight={self.parent_weight!r} must be a number >= 0 (the weight of each "
                              "of the coarser scale's 3 x 3 parent terms in a neighbourhood; 0 = none, the thesis)")
         int_in("parent_min_side", self.parent_min_side, 0)
+        if self.shared_weight is not None and not (_real(self.shared_weight) and 0 <= self.shared_weight <= 1):
+            raise InputError(f"shared_weight={self.shared_weight!r} must be a number in [0, 1] (the weight of the "
+                             "window terms on the axis the constrained views share; 0 = left out, 1 = the thesis)")
         one_of("relaxation", self.relaxation, RELAXATIONS)
         if self.upsampling is None:  # 1/8 for ICM (thesis §5.3.3), 8/8 for annealing (TIP14)
             object.__setattr__(self, "upsampling", "8/8" if self.relaxation == "annealing" else "1/8")
@@ -286,7 +300,7 @@ class MLParams:
                      shape: tuple[int, int] | None = None) -> "MLParams":
         """These parameters with ``likelihood="auto"``, ``distance="auto"``,
         ``insert_spacing=None``, ``falloff=None``, ``seam_gap=None``, ``parent_weight=None``,
-        ``prune_projected=None``,
+        ``shared_weight=None``, ``prune_projected=None``,
         ``prune_similar=None`` and ``prune_sample=None`` resolved for an exemplar of *n_levels*
         levels, *categorical* if they are its own values (not a quantisation of grey ones),
         whose :func:`~clsolid.core.slices.seam_ratio` is *seam_ratio*, of *shape* (rows,
@@ -315,9 +329,12 @@ class MLParams:
         parents = self.parent_weight
         if parents is None:
             parents = CATEGORICAL_PARENT_WEIGHT if phases else 0.0
+        shared = self.shared_weight
+        if shared is None:  # measured with two views only
+            shared = CATEGORICAL_SHARED_WEIGHT if phases and self.views == 2 else 1.0
         resolved = replace(self, likelihood=likelihood, distance=distance, insert_spacing=spacing,
                            falloff=float(falloff), seam_gap=gap, prune_projected=projected,
-                           parent_weight=float(parents))
+                           parent_weight=float(parents), shared_weight=float(shared))
         return replace(resolved, prune_similar=resolved.n_similar, prune_sample=resolved.n_sample)
 
     def _by_projection(self, value: int | None, projected: int, default: int) -> int:
