@@ -21,14 +21,13 @@ from typing import Any
 
 import numpy as np
 
+from ..core.views import VIEW_AXES
 from ..errors import InputError
 from ._common import VIEWS, _as_real_array, check_views
 from .phases import phase_values, to_labels
 
 #: The level the autocorrelation falls to at a correlation length.
 HALF = 0.5
-#: (rows axis, columns axis) of each view's slices in a (Z, Y, X) volume.
-VIEW_AXES = {"front": (1, 2), "right": (1, 0), "top": (0, 2)}
 
 
 def lag_correlations(data: Any, axis: int, max_lag: int, phases: Any = None) -> np.ndarray:
@@ -60,22 +59,23 @@ def lag_correlations(data: Any, axis: int, max_lag: int, phases: Any = None) -> 
         raise InputError(f"max_lag={max_lag!r} must be 1 to {a.shape[axis] - 1} along axis {axis}")
     n = a.shape[axis]
 
-    def pairs(lag: int) -> tuple[np.ndarray, np.ndarray]:
-        return np.take(a, range(n - lag), axis), np.take(a, range(lag, n), axis)
+    lags = range(1, int(max_lag) + 1)
+
+    def pairs(b: np.ndarray, lag: int) -> tuple[np.ndarray, np.ndarray]:
+        return np.take(b, range(n - lag), axis), np.take(b, range(lag, n), axis)
 
     if phases is not None:
         f = np.array([np.mean(a == p) for p in np.asarray(phases)])
         base = float(np.sum(f * f))
         if base >= 1.0:
             return np.full(int(max_lag) + 1, np.nan)
-        same = [np.mean(np.equal(*pairs(lag))) for lag in range(1, int(max_lag) + 1)]
+        same = [np.mean(np.equal(*pairs(a, lag))) for lag in lags]
         return np.concatenate([[1.0], (np.array(same) - base) / (1.0 - base)])
-    centred = a.astype(np.float64) - a.mean()
+    centred = a - a.mean()  # float64 already
     var = float(np.mean(centred * centred))
     if var == 0.0:
         return np.full(int(max_lag) + 1, np.nan)
-    a = centred
-    return np.array([1.0] + [float(np.mean(np.multiply(*pairs(lag)))) / var for lag in range(1, int(max_lag) + 1)])
+    return np.array([1.0] + [float(np.mean(np.multiply(*pairs(centred, lag)))) / var for lag in lags])
 
 
 def correlation_length(rho: Any, level: float = HALF) -> float:
