@@ -174,6 +174,22 @@ def test_gallery_counts_targets_seed_by_seed(tool):
     assert "Seed by seed (1, 2):" in table
     assert "- mirror <= 0.1: 1/2 · 1/2\n" in table and "- patch <= 0.3: 2/2 · 1/2\n" in table
     assert "Seed by seed" not in gallery.markdown(rows, dict(settings, seeds=[1]), runs)
+    assert "2 pp" not in table  # issue 11's stricter targets are kopf's alone
+
+
+def test_gallery_counts_kopfs_own_targets(tool):
+    """`kopf` is also held to issue 11's targets: phases within 2 points, histogram <= 0.05."""
+    gallery = tool("gallery")
+    scores = {v: {key: None for key, _ in gallery.SCORES} for v in gallery.VIEWS}
+    for v in gallery.VIEWS:
+        scores[v]["histogram_kl"] = 0.07  # within issue 10's 0.1, not issue 11's 0.05
+    row = {"phase_error_pp": 1.5, "scores": scores, "mirror": 0.0, "mirror_chance": 0.0, "stretch": 1.0,
+           "copy": {"fraction": 0.5}, "seconds": 1.0, "constrained": ["front", "right"]}
+    other = dict(row, phase_error_pp=2.5)  # within 3 points, not 2
+    counts = {label: count for label, count, _ in gallery.target_counts({"a": row, "b": other}, "kopf")}
+    assert counts["every phase within 3 pp"] == "2/2" and counts["every phase within 2 pp (issue 11, kopf)"] == "1/2"
+    assert counts["histogram <= 0.1"] == "2/2" and counts["histogram <= 0.05 (issue 11, kopf)"] == "0/2"
+    assert not any("issue 11" in label for label, _, _ in gallery.target_counts({"a": row}, "ml"))
 
 
 def test_gallery_merges_runs_split_by_exemplar(tool, tmp_path, capsys):
