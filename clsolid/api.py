@@ -39,7 +39,7 @@ _ML_OPTIONS = ("pyramid", "xi", "stop_fraction", "max_sweeps", "upsampling", "in
                "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
                "prune_similar", "prune_sample", "prune_min_weight", "prune_projected",
                "prune_projected_k", "prune_projected_probe", "prune_projected_sweeps", "falloff", "shared_weight",
-               "parent_weight",
+               "shared_profile", "parent_weight",
                "parent_min_side", "region")
 _BACKEND_OPTIONS = ("vector_width", "voxels_per_item", "local_size", "max_batch", "tile", "client", "scratch")
 #: Options of a likelihood run that are not parameters of the method (where to save it).
@@ -289,11 +289,13 @@ def synthesize(
         the thesis: docs/choices.md), ``shared_weight`` (the weight of the window terms on
         the axis the constrained views share, the voxels above and below a voxel, which both
         views' windows hold; default 0 for categorical exemplars with 2 views, else 1; 1 =
-        every term alike, the thesis: docs/choices.md), ``parent_weight`` (each of the coarser scale's 3 x 3
-        parent terms, added to every neighbourhood of the scales whose coarser exemplar is
-        at least ``parent_min_side`` pixels on its shorter side (default 64), weighs this
-        against 1 for a term of the window; default 4 for categorical exemplars, 0 for grey
-        ones; 0 = none, the thesis: docs/choices.md),
+        every term alike, the thesis: docs/choices.md), ``shared_profile`` (which terms a
+        ``shared_weight`` W < 1 weighs: ``"direction"``, the default, every term 1 - (1 - W)
+        cos^2 of its angle to the shared axis; ``"line"`` the terms on that axis alone),
+        ``parent_weight`` (each of the coarser scale's 3 x 3 parent terms, added to every
+        neighbourhood of the scales whose coarser exemplar is at least ``parent_min_side``
+        pixels on its shorter side (default 64), weighs this against 1 for a term of the
+        window; default 4 for categorical exemplars, 0 for grey ones; 0 = none, the thesis: docs/choices.md),
         ``builtin_size``, and OpenCL tuning: ``vector_width``,
         ``voxels_per_item``, ``local_size``, ``max_batch``.
 

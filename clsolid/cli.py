@@ -18,7 +18,7 @@ from pathlib import Path
 
 from .errors import ClsolidError, DeviceMemoryError, HostMemoryError, InputError, KernelBuildError, NoDeviceError
 from .ml.params import (DEFAULT_BANDWIDTH_FACTOR, DISTANCES, HEURISTICS, INHERITED, PYRAMIDS, LIKELIHOODS,
-                        RELAXATIONS, SLICE_LAYOUTS, UPSAMPLING, MLParams)
+                        RELAXATIONS, SHARED_PROFILES, SLICE_LAYOUTS, UPSAMPLING, MLParams)
 from .presets import PRESETS, Preset, get_preset
 from .search.params import DEFAULT_CANDIDATES, HISTOGRAMS, ORDERS_ALL, RULES, SEARCHES
 from .search.params import METHODS as SEARCH_METHODS
@@ -214,6 +214,10 @@ def _add_synth(sub) -> None:
                    help="weight of the window terms on the axis the constrained views share (the voxels above "
                         "and below, in both views' windows; default: 0 for categorical exemplars with 2 views, "
                         "else 1); 1 = every term alike, the thesis")
+    p.add_argument("--shared-profile", choices=SHARED_PROFILES, default=d.shared_profile,
+                   help="with --shared-weight W below 1, which terms it weighs: 'direction' (default) every term "
+                        "1 - (1 - W) cos^2 of its angle to the shared axis, 'line' only the terms on that axis "
+                        "(W; the rest 1; thin networks such as cracks stay more connected)")
     p.add_argument("--region", type=int, default=d.region, metavar="N",
                    help="ml: visit the block region by region, cubes of at most N voxels, every set of one before "
                         "the next (another visiting order; README, Using it): with --scratch and --tile N, each "
@@ -358,8 +362,8 @@ _ML_ONLY = ("heuristic", "pyramid", "xi", "stop_fraction", "max_sweeps", "upsamp
             "bandwidth", "bandwidth_factor",
             "relaxation", "anneal_start", "anneal_cooling", "sweeps", "balance", "likelihood", "distance",
             "prune_similar", "prune_sample", "prune_min_weight", "prune_projected", "prune_projected_k",
-            "prune_projected_probe", "prune_projected_sweeps", "falloff", "shared_weight", "parent_min_side", "region",
-            "tile",
+            "prune_projected_probe", "prune_projected_sweeps", "falloff", "shared_weight", "shared_profile",
+            "parent_min_side", "region", "tile",
             "scratch", "scheduler", "workers", "indices", "track")
 _WL_ONLY = ("iterations", "inner", "no_parent", "init", "rule", "order", "causal", "histogram",
             "candidates", "specify", "search", "exact_passes", "seed_components", "coherence_levels", "index_histogram",
@@ -432,7 +436,8 @@ def _ml_options(args) -> dict:
                    prune_min_weight=args.prune_min_weight, prune_projected=args.prune_projected,
                    prune_projected_k=args.prune_projected_k, prune_projected_probe=args.prune_projected_probe,
                    prune_projected_sweeps=args.prune_projected_sweeps,
-                   falloff=args.falloff, shared_weight=args.shared_weight, parent_min_side=args.parent_min_side,
+                   falloff=args.falloff, shared_weight=args.shared_weight, shared_profile=args.shared_profile,
+                   parent_min_side=args.parent_min_side,
                    region=args.region)
     if args.parent_weight is not None:
         options["parent_weight"] = args.parent_weight

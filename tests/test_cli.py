@@ -107,6 +107,8 @@ def test_same_seed_same_file(tmp_path, device):
     (["--falloff", "0"], "falloff", 0.0),
     ([], "shared_weight", 1.0),  # brick is grey: every term alike
     (["--shared-weight", "0.25"], "shared_weight", 0.25),
+    ([], "shared_profile", "direction"),
+    (["--shared-weight", "0", "--shared-profile", "line"], "shared_profile", "line"),
     ([], "region", 0),  # set by set over the whole block
     (["--region", "6"], "region", 6),
 ])

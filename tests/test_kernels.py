@@ -107,31 +107,51 @@ def test_falloff_weighs_each_term_by_its_gaussian(small_labels):
 
 
 @pytest.mark.parametrize("views, lines", [(2, ["column"]), (3, ["column", "row"])])
-def test_the_shared_terms_are_the_voxels_two_views_hold(small_labels, views, lines):
+def test_shared_weight_weighs_terms_by_their_direction_along_a_shared_axis(small_labels, views, lines):
     """With front and right the voxels above and below (a view's centre column, dc = 0) are in
-    both windows; with the top view too, each view's centre row as well. shared_weight weighs
-    them, the other terms 1, all scaled to a mean of 1, on top of the fall-off."""
-    from clsolid.ml.model import falloff_weights, shared_terms
+    both windows; with the top view too, each view's centre row as well. shared_weight W
+    weighs a term 1 - (1 - W) cos^2 of its angle to each such line: W on the line, 1 across
+    it (with one shared line), all scaled to a mean of 1, on top of the fall-off."""
+    from clsolid.ml.model import direction_weights, falloff_weights, shared_axes
 
     shape = (6, 7, 8)
     model = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, views=views, falloff=0), 0)
     assert model.term_weight is None  # shared_weight None reaches build_scale as 1: every term alike
+    assert shared_axes(model.offsets) == ([1] if views == 2 else [0, 1, 2])
     dr, dc = np.divmod(np.delete(np.arange(25), 12), 5)
     dr, dc = dr - 2, dc - 2  # each term's (row, column) offset in its view, row-major, centre left out
-    want = np.zeros(24, bool)
-    want |= dc == 0 if "column" in lines else False
-    want |= dr == 0 if "row" in lines else False
-    np.testing.assert_array_equal(shared_terms(model.offsets), want)
-    for v in range(views):  # the very voxels: each shared term's offset is in another view's window
+    on_line = np.zeros(24, bool)
+    on_line |= dc == 0 if "column" in lines else False
+    on_line |= dr == 0 if "row" in lines else False
+    for v in range(views):  # the lines are the very voxels another view's window holds
         others = {tuple(o) for w in range(views) if w != v for o in model.offsets[w]}
-        assert [tuple(o) in others for o in model.offsets[v]] == want.tolist()
-    left_out = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, views=views, shared_weight=0), 0)
-    w = left_out.term_weight
-    assert (w[want] == 0).all() and np.allclose(w[~want], 24 / np.sum(~want)) and w.mean() == pytest.approx(1)
+        assert [tuple(o) in others for o in model.offsets[v]] == on_line.tolist()
+    cos2_row, cos2_col = dr**2 / (dr**2 + dc**2), dc**2 / (dr**2 + dc**2)
+    for shared in (0.0, 0.3):
+        want = 1 - (1 - shared) * cos2_row  # the column's direction is the rows' axis
+        if views == 3:
+            want = want * (1 - (1 - shared) * cos2_col)
+        np.testing.assert_allclose(direction_weights(model.offsets, shared), want, rtol=1e-12)
+    w = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, views=views, shared_weight=0), 0).term_weight
+    assert (w[on_line] == 0).all() and (w[~on_line] > 0).all() and w.mean() == pytest.approx(1)
+    if views == 2:  # across the shared axis the most, as the centre row's terms
+        assert np.flatnonzero(w == w.max()).tolist() == np.flatnonzero(dr == 0).tolist()
     both = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, views=views, falloff=1.5,
                                                      shared_weight=0.5), 0).term_weight
-    g = falloff_weights(model.offsets[0], 1.5) * np.where(want, 0.5, 1.0)
+    g = falloff_weights(model.offsets[0], 1.5) * direction_weights(model.offsets, 0.5)
     np.testing.assert_allclose(both, g / g.mean(), rtol=1e-12)
+    line = build_scale(small_labels, shape, MLParams(neighborhood=5, scales=1, views=views, shared_weight=0,
+                                                     shared_profile="line"), 0).term_weight
+    assert (line[on_line] == 0).all() and np.allclose(line[~on_line], 24 / np.sum(~on_line))  # the rest alike
+
+
+def test_a_record_from_before_the_shared_profiles_weighed_the_line():
+    """A checkpoint or sidecar with shared_weight but no shared_profile ran with the line alone."""
+    old = {k: v for k, v in MLParams(shared_weight=0.0).to_dict().items() if k != "shared_profile"}
+    assert MLParams.from_dict(old).shared_profile == "line"
+    assert MLParams.from_dict(MLParams(shared_weight=0.0).to_dict()).shared_profile == "direction"
+    with pytest.raises(InputError, match="shared_profile"):
+        MLParams(shared_profile="diagonal")
 
 
 @pytest.mark.parametrize("name, views, given, want", [("composite3", 2, None, 0.0), ("composite3", 3, None, 1.0),

@@ -11,8 +11,8 @@ site's centre value and y_{p,r} its neighbour r. The constant 1/(n h^d) cancels 
 every heuristic and is dropped. With ``distance="mismatch"`` every squared difference
 (a - b)^2 above is [a != b] instead, with ``"weighted"`` [a != b] (c_a + c_b)
 (:func:`difference`, :func:`phase_costs`), and the bandwidth is taken in those units
-(:func:`phase_sigma`). A fall-off weighs each term (:func:`falloff_weights`), the terms two views
-share another weight (:func:`term_weights`); with
+(:func:`phase_sigma`). A fall-off weighs each term (:func:`falloff_weights`), the terms along an axis two
+views share another weight (:func:`direction_weights`, :func:`term_weights`); with
 ``parent_weight`` > 0 the sum over r also runs over the coarser scale's 3 x 3 around the
 parent, at t = 0, each term times that weight (:func:`parent_tables`, :func:`parent_block`).
 """
@@ -169,13 +169,46 @@ def shared_terms(offsets: np.ndarray) -> np.ndarray:
     return np.array([tuple(o) in others for o in offsets[0]], dtype=bool)
 
 
-def term_weights(offsets: np.ndarray, sigma: float, shared: float) -> np.ndarray | None:
-    """``(R,)`` weight of each window term: the fall-off's (:func:`falloff_weights`), times
-    *shared* on the :func:`shared_terms`, scaled to a mean of 1; None when every term weighs 1."""
+def shared_axes(offsets: np.ndarray) -> list[int]:
+    """The volume axes that two or more views' windows, *offsets* ``(V, R, 3)``, run along
+    (y for front and right; every axis with three views)."""
+    return [a for a in range(3) if np.sum(np.any(offsets[:, :, a] != 0, axis=1)) >= 2]
+
+
+def direction_weights(offsets: np.ndarray, shared: float) -> np.ndarray:
+    """``(R,)`` weight of each term of a view's window by its direction: ``1 - (1 - shared)
+    cos^2(theta)``, theta the angle between its offset and an axis another view's window
+    runs along too (a product over such axes of the view). A term on that axis weighs
+    *shared*, one across it 1, and one between them in between: near that axis the two
+    views' windows say nearly the same (a feature's neighbours straight above and just
+    beside it differ little), so that direction would count about twice. Every view's
+    terms pair alike (row-major (dr, dc)), so one vector serves them all."""
+    weights = []
+    for view in offsets:
+        o = view.astype(np.float64)
+        length2 = np.sum(o**2, axis=1)
+        w = np.ones(o.shape[0])
+        for axis in shared_axes(offsets):
+            w *= 1.0 - (1.0 - shared) * o[:, axis] ** 2 / length2
+        weights.append(w)
+    if not all(np.allclose(w, weights[0]) for w in weights[1:]):  # VIEW_AXES keeps them alike
+        raise AssertionError("the views' windows are weighted differently; the kernel has one table")
+    return weights[0]
+
+
+def term_weights(offsets: np.ndarray, sigma: float, shared: float, profile: str = "direction") -> np.ndarray | None:
+    """``(R,)`` weight of each window term: the fall-off's (:func:`falloff_weights`), times,
+    for *shared* < 1, its direction's (*profile* ``"direction"``: :func:`direction_weights`) or
+    *shared* on the terms another view's window holds too (``"line"``: :func:`shared_terms`),
+    scaled to a mean of 1; None when every term weighs 1."""
     g = falloff_weights(offsets[0], sigma)
     if shared == 1.0:
         return g
-    w = (np.ones(offsets.shape[1]) if g is None else g) * np.where(shared_terms(offsets), shared, 1.0)
+    if profile == "direction":
+        by = direction_weights(offsets, shared)
+    else:
+        by = np.where(shared_terms(offsets), shared, 1.0)
+    w = (np.ones(offsets.shape[1]) if g is None else g) * by
     return w / w.mean()
 
 
@@ -333,7 +366,7 @@ def build_scale(
     union = np.unique(offsets.reshape(-1, 3), axis=0)  # the temperatures' neighbours: no parent terms
     sshape = scale_shape(shape, level)
     weight = term_weights(offsets, params.falloff or 0.0,  # every view's rows pair alike
-                          1.0 if params.shared_weight is None else float(params.shared_weight))
+                          1.0 if params.shared_weight is None else float(params.shared_weight), params.shared_profile)
     parents = 0
     coarse = None
     if params.parent_weight and level < params.scales - 1:  # the coarsest scale has no parent

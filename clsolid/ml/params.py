@@ -72,6 +72,14 @@ GREY_FALLOFF = 3.0
 # connectedness rise, the rest alike; grey ones keep them (hrtem's fringes and brick's
 # courses lose their spacing without: autocorrelation 0.53-0.86 and 0.33-0.44; docs/choices.md).
 CATEGORICAL_SHARED_WEIGHT = 0.0
+#: Which terms shared_weight < 1 weighs (clsolid.ml.model.term_weights). "line": the shared
+#: axis's own terms (the voxels straight above and below) weigh W, the rest 1; "direction":
+#: every term 1 - (1 - W) cos^2 of its angle to that axis, so that a term just off the axis,
+#: which says nearly what the axis's own say, weighs nearly as little. On the ten categorical
+#: gallery exemplars (seeds 1-6, W = 0) "direction" brought the stretch within 1.25x in 46 of 60
+#: runs against 29 with the issue targets alike, at a cost to thin networks' connectedness
+#: (cracks' C2 met on 1 of 6 seeds against 5; docs/choices.md).
+SHARED_PROFILES = ("direction", "line")
 # The coarser scale's 3 x 3 parent terms (parent_weight=None: by the exemplar). On categorical
 # exemplars each weighs 4 against 1 for a window term, at the scales whose coarser exemplar has
 # at least PARENT_MIN_SIDE pixels on its shorter side: at 128^2 -> 64^3 (ten categorical gallery
@@ -179,6 +187,7 @@ class MLParams:
     # each window term on a line through the voxel that another constrained view's window holds too;
     # None: by the exemplar (for_exemplar); 1: as any term (the thesis; a checkpoint older than it, as it ran)
     shared_weight: float | None = None
+    shared_profile: str = "direction"  # which terms it weighs (SHARED_PROFILES; a record older than it: "line")
     # (a checkpoint older than the fall-off has no such key: None reaches build_scale, which takes 0, as it ran)
     relaxation: str = "gibbs"
     anneal_start: float = 1.0
@@ -252,6 +261,7 @@ class MLParams:
         if self.shared_weight is not None and not (_real(self.shared_weight) and 0 <= self.shared_weight <= 1):
             raise InputError(f"shared_weight={self.shared_weight!r} must be a number in [0, 1] (the weight of the "
                              "window terms on the axis the constrained views share; 0 = left out, 1 = the thesis)")
+        one_of("shared_profile", self.shared_profile, SHARED_PROFILES)
         one_of("relaxation", self.relaxation, RELAXATIONS)
         if self.upsampling is None:  # 1/8 for ICM (thesis §5.3.3), 8/8 for annealing (TIP14)
             object.__setattr__(self, "upsampling", "8/8" if self.relaxation == "annealing" else "1/8")
@@ -369,6 +379,8 @@ class MLParams:
         other keys are ignored. Keys a record predates take the value it ran with, not today's default."""
         kept = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
         kept.setdefault("parent_weight", 0.0)  # before parent terms there were none
+        if "shared_weight" in kept:  # weighed the shared line alone before the profiles
+            kept.setdefault("shared_profile", "line")
         if kept.get("prune_projected"):
             kept = {**_PROJECTED_AS_IT_RAN, **kept}
         return cls(**kept)
