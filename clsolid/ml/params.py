@@ -184,8 +184,9 @@ class MLParams:
     falloff: float | None = None  # None: by the exemplar (for_exemplar); 0: uniform terms (the thesis)
     parent_weight: float | None = None  # each parent term's weight; None: by the exemplar; 0: none (the thesis)
     parent_min_side: int = PARENT_MIN_SIDE  # parent terms where the coarser exemplar is at least this wide
-    # each window term on a line through the voxel that another constrained view's window holds too;
-    # None: by the exemplar (for_exemplar); 1: as any term (the thesis; a checkpoint older than it, as it ran)
+    # each window term on a line through the voxel that another constrained view's window holds too (and,
+    # by shared_profile, the terms near it); None: by the exemplar (for_exemplar); 1: as any term (the
+    # thesis; a checkpoint older than it, as it ran)
     shared_weight: float | None = None
     shared_profile: str = "direction"  # which terms it weighs (SHARED_PROFILES; a record older than it: "line")
     # (a checkpoint older than the fall-off has no such key: None reaches build_scale, which takes 0, as it ran)
