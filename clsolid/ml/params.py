@@ -78,7 +78,8 @@ CATEGORICAL_SHARED_WEIGHT = 0.0
 #: which says nearly what the axis's own say, weighs nearly as little. On the ten categorical
 #: gallery exemplars (seeds 1-6, W = 0) "direction" brought the stretch within 1.25x in 46 of 60
 #: runs against 29 with the issue targets alike, at a cost to thin networks' connectedness
-#: (cracks' C2 met on 1 of 6 seeds against 5; docs/choices.md).
+#: (cracks' C2 met on 1 of 6 seeds against 5); at 128^2 (seeds 1-4) autocorrelation 32 of 36
+#: runs against 29, stretch 19 of 40 against 13 (docs/choices.md).
 SHARED_PROFILES = ("direction", "line")
 # The coarser scale's 3 x 3 parent terms (parent_weight=None: by the exemplar). On categorical
 # exemplars each weighs 4 against 1 for a window term, at the scales whose coarser exemplar has
