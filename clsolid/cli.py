@@ -437,8 +437,7 @@ def _ml_options(args) -> dict:
                    prune_projected_k=args.prune_projected_k, prune_projected_probe=args.prune_projected_probe,
                    prune_projected_sweeps=args.prune_projected_sweeps,
                    falloff=args.falloff, shared_weight=args.shared_weight, shared_profile=args.shared_profile,
-                   parent_min_side=args.parent_min_side,
-                   region=args.region)
+                   parent_min_side=args.parent_min_side, region=args.region)
     if args.parent_weight is not None:
         options["parent_weight"] = args.parent_weight
     if args.tile is not None:

@@ -313,12 +313,17 @@ def _hrtem(size: int, rng: np.random.Generator) -> np.ndarray:
         signal[stronger] = (envelope * np.cos(2 * np.pi * freq * (v + bend * u**2) + phase))[stronger]
     noise = _random_field(rng, size, _gaussian(12.0))
     grey = 128.0 - 70.0 * signal + 16.0 * noise
-    return np.clip(np.round(grey), 0, 255).astype(np.uint8)
+    return grey_levels(grey)
+
+
+def grey_levels(values: np.ndarray) -> np.ndarray:
+    """*values* (grey, on 0..255) rounded to uint8 as every grey gallery exemplar is."""
+    return np.clip(np.round(values), 0, 255).astype(np.uint8)
 
 
 def _skimage_texture(name: str) -> Callable[[int, np.random.Generator | None], np.ndarray]:
     def make(size: int, rng: np.random.Generator | None) -> np.ndarray:
-        return np.clip(np.round(builtin_exemplar(name, size=size)), 0, 255).astype(np.uint8)
+        return grey_levels(builtin_exemplar(name, size=size))
     return make
 
 
@@ -336,7 +341,7 @@ def _tissue_grey() -> np.ndarray:
 
 def _tissue(size: int, rng: np.random.Generator | None) -> np.ndarray:
     grey = _tissue_grey()[_TISSUE_CROP]
-    return np.clip(np.round(_area_downscale(grey, size)), 0, 255).astype(np.uint8)
+    return grey_levels(_area_downscale(grey, size))
 
 
 # --------------------------------------------------------------------------- registry

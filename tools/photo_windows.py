@@ -32,7 +32,8 @@ import sys
 import numpy as np
 
 from clsolid import metrics
-from clsolid.gallery import gallery_draw, gallery_exemplar, gallery_info, gallery_names, gallery_photograph
+from clsolid.gallery import (gallery_draw, gallery_exemplar, gallery_info, gallery_names, gallery_photograph,
+                             grey_levels)
 
 #: The gallery's exemplars that have a generator to draw again.
 GENERATED = tuple(n for n in gallery_names() if gallery_info(n).seed is not None)
@@ -91,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
         generated = name in GENERATED
         exemplar = gallery_exemplar(name, args.size)
         if not generated:  # the whole photograph at the exemplar's scale, rounded as the exemplar is
-            photo = np.clip(np.round(gallery_photograph(name, args.size)), 0, 255).astype(np.uint8)
+            photo = grey_levels(gallery_photograph(name, args.size))
         for side in args.sides:
             if generated and side > args.size:
                 ap.error(f"a window of {side} does not fit a draw of {args.size}")

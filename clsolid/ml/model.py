@@ -183,12 +183,12 @@ def direction_weights(offsets: np.ndarray, shared: float) -> np.ndarray:
     views' windows say nearly the same (a feature's neighbours straight above and just
     beside it differ little), so that direction would count about twice. Every view's
     terms pair alike (row-major (dr, dc)), so one vector serves them all."""
-    weights = []
+    axes, weights = shared_axes(offsets), []
     for view in offsets:
         o = view.astype(np.float64)
         length2 = np.sum(o**2, axis=1)
         w = np.ones(o.shape[0])
-        for axis in shared_axes(offsets):
+        for axis in axes:
             w *= 1.0 - (1.0 - shared) * o[:, axis] ** 2 / length2
         weights.append(w)
     if not all(np.allclose(w, weights[0]) for w in weights[1:]):  # VIEW_AXES keeps them alike
