@@ -76,8 +76,8 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
 
     Notes
     -----
-    Cost grows with the slices measured: the defaults take about 4 s for a 128^3 volume
-    and 17 s for 256^3 on two CPU cores, most of it tracing fringes.
+    Cost grows with the slices measured, most of it tracing fringes (timings:
+    docs/performance.md).
     """
     ex = as_image(exemplar, "exemplar", min_side=MIN_EXEMPLAR_SIDE)
     vol = as_volume(volume, "volume", min_side=MIN_VOLUME_SIDE)

@@ -1,4 +1,4 @@
-"""NP_CW's rule (thesis_spec §1.6.3, after Chen & Wang 2010): candidate sets, index and
+"""NP_CW's rule (Urs thesis, §3.4.2-3.4.3, after Chen & Wang 2010): candidate sets, index and
 position histograms, and the discrete solver that copies an exemplar pixel.
 
 Analysis: every exemplar site gets a candidate set, itself and its ``candidates - 1``
@@ -25,18 +25,17 @@ is ``v* = sum w_i value(c_i) / sum w_i`` and the voxel copies the value of the c
 to v* (the first view's on a tie): the discrete solver, so the block holds only exemplar
 values. The voxel's source becomes that site.
 
-The two histogram weights are the thesis's reconstruction (thesis_spec §1.6.3 [RECON]: its
-equations 3.9-3.10 are lost), ``1 + lambda * max(0, H - level)`` with lambda = 1, read with
+The two histogram weights are a reconstruction of the thesis's (Urs thesis, §3.4.2-3.4.3:
+its equations 3.9-3.10 are lost), ``1 + lambda * max(0, H - level)`` with lambda = 1, read with
 the excess measured in units of the uniform level (``H / level - 1``), as ``kopf``'s
 grey-level factor is (``s * (H_solid - H_exemplar)`` on fractions): on raw counts a site
 used twice as often as uniform would weigh 1 + theta (about 80 at 64^3), on fractions 1 +
-1/sites (no effect). Chen & Wang's own paper could not be consulted from the machine this
-was written on; the choice is documented, not checked against it.
+1/sites (no effect). This reading is not checked against Chen & Wang's own paper.
 
-Both histograms are live counts over the current block (thesis_spec §1.6.3 [IMPL]): a
-voxel's old choice and source are taken out when it gets new ones, set by set. Each level
-starts with no sources (its voxels are the coarser level's values); the counts fill as its
-first pass visits the voxels.
+Both histograms are live counts over the current block (Urs thesis, §3.4.2-3.4.3 does not
+say whether they are decremented or rebuilt): a voxel's old choice and source are taken out
+when it gets new ones, set by set. Each level starts with no sources (its voxels are the
+coarser level's values); the counts fill as its first pass visits the voxels.
 """
 
 from __future__ import annotations

@@ -13,10 +13,9 @@ For kopf, on a level whose exemplar holds only phases (at most
 :data:`~clsolid.search.params.MAX_PHASES` values), each site's set also holds the nearest
 site centred on each phase (:func:`phase_nearest`). Without them a minority phase that the
 neighbours' matches stop proposing never comes back: kopf's phase balance only chooses
-among the phases the views' matches propose, and composite4's 4.6 % phase fell to 0.8 %
-(gallery, 64² → 48³). chen-wang, which has no balance, does without them (with them, on
-the gallery's ten categorical exemplars, its phases drifted further: composite3 5.4 → 7.3
-points).
+among the phases the views' matches propose, so a minority phase dwindles. chen-wang, which
+has no balance, does without them: with them its phase fractions drift further from the
+exemplar's (docs/design.md, "Every phase proposed").
 
 Each voxel's last match in each view is kept. A finer level starts from the coarser
 level's matches: the parent's site (r, c) becomes the site (2r + row parity, 2c + column
@@ -216,7 +215,8 @@ class DeviceSearch:
     changed it otherwise (an exhaustive search of voxels without candidates). The kernel
     reads one copy and writes the next (a spare, swapped in after), so that every voxel
     reads its neighbours' matches as the call began even where the voxels are neighbours
-    (Kopf's overlap rule: with the matches updated in place, runs with one seed differed).
+    (Kopf's overlap rule: with the matches updated in place, the result would depend on the
+    order the device runs the voxels in, and one seed would not give one block).
     The block reaches the device through *block* (:class:`~clsolid.search.block.DeviceBlock`,
     shared with the level's exhaustive searches; one of its own if not given).
     """

@@ -1,12 +1,13 @@
-"""The multi-scale driver of the search methods (thesis_spec §1.1, §1.3): pyramids, starts,
+"""The multi-scale driver of the search methods (Urs thesis, §3.2.2-3.2.3): pyramids, starts,
 passes over conflict-free sets, progress; the per-voxel rule is the method's (``wl.py``,
-``kopf.py``).
+``kopf.py``, ``chenwang.py``).
 
 The coarsest level starts as noise drawn from its exemplar's pixels; each finer level
 starts from the coarser result up-sampled (or, with ``init="noise"``, from fresh noise,
-Wei & Levoy's reading, thesis_spec §1.3 (a)), and the coarser result also enters every
-neighbourhood as its parent square. One pass visits every voxel once, conflict-free set by
-conflict-free set in a seeded order, so a pass equals a sequential one in that order.
+Wei & Levoy's reading; Urs thesis, §3.2.3 does not say how a finer level starts), and the
+coarser result also enters every neighbourhood as its parent square. One pass visits every
+voxel once, conflict-free set by conflict-free set in a seeded order, so a pass equals a
+sequential one in that order.
 """
 
 from __future__ import annotations
@@ -183,7 +184,7 @@ def _searched_table(table: np.ndarray, codes: Any, k: int, parent_weight: float)
     *codes* (:mod:`clsolid.search.codes`; None: grey values) and the parent's terms scaled
     by sqrt(*parent_weight*), as the voxels' parent squares are, so that each weighs
     *parent_weight* in the distance while the kernels keep unit weights (a weight other
-    than 1 would cost a multiply a term: 40 % of the exhaustive search's time here)."""
+    than 1 would cost a multiply a term, a large share of the exhaustive search's time)."""
     out = table if codes is None else codes.encode_terms(table, k * k)
     if parent_weight != 1.0 and table.shape[1] > k * k:
         out = np.array(out, np.float64)
@@ -237,7 +238,7 @@ def _start(exemplar: np.ndarray, shape: tuple[int, int, int], coarse: np.ndarray
 
 #: Rough cost of a finer level against the one before it, by the two levels' searches: 8x the
 #: voxels, and with the exhaustive search about 4x the sites (the coherence candidates do not
-#: grow); a first level among the candidates after an exhaustive one, about 3x (brick, 64^3).
+#: grow); a first level among the candidates after an exhaustive one, about 3x (measured).
 _FINER_COST = {("exact", "exact"): 32.0, ("coherence", "coherence"): 8.0, ("exact", "coherence"): 3.0}
 
 

@@ -1,10 +1,10 @@
 """Neighbourhood features of the search methods: the k x k square of a level, plus the 3 x 3
 square of the coarser level around the parent position (the multi-resolution neighbourhood,
-thesis_spec §1.3), for exemplar sites and for voxels in one view plane.
+Urs thesis, §3.2.3), for exemplar sites and for voxels in one view plane.
 
 Layout of a feature row: the k*k square read row by row (the centre at ``k*k // 2``), then,
 with a parent level, its 3 x 3 square read row by row. Exemplar sites count only where both
-squares lie inside their images (no wrap-around in the exemplar, thesis_spec §1.4); the
+squares lie inside their images (no wrap-around in the exemplar, Urs thesis, §3.2.4); the
 volume wraps on every axis (toroidal output).
 """
 

@@ -1,4 +1,4 @@
-"""NP_K's rule (thesis_spec §1.6.2): Kopf et al.'s robust weights and grey-level histogram
+"""NP_K's rule (Urs thesis, §3.3-3.4.1): Kopf et al.'s robust weights and grey-level histogram
 re-weighting, on each view's best match.
 
 At a voxel, each view's neighbourhood (centre left out) is matched exactly; the match
@@ -7,8 +7,8 @@ gets the IRLS weight of the robust norm ``||N(v) - N(p)||^r`` with r = 0.8, that
 root of the SSD) and ``eps`` a thousandth of the exemplar's range (a perfect match would
 have an infinite weight); then ``w / (1 + s * max(0, H_solid(g) - H_exemplar(g)))`` at the
 match's grey level g, with H the histograms as fractions of the block and of the level's
-exemplar, and s the number of bins (the spec's scale: relative to the uniform level; with
-plain fractions the correction is negligible, with counts overwhelming). The voxel takes
+exemplar, and s the number of bins (a scale relative to the uniform level: with plain
+fractions the correction is negligible, with counts overwhelming). The voxel takes
 the weighted mean of the matches' centre values; on a categorical exemplar (at most 8
 values) the value with the largest total weight instead, so a voxel is always a phase.
 The block's histogram follows every voxel that changes, set by set (the thesis updates it
@@ -169,10 +169,10 @@ def vote_balanced(support: np.ndarray, target: np.ndarray) -> np.ndarray:
     The per-phase bias b is the likelihood method's balance (:func:`clsolid.ml.balance.project_bias`)
     fitted to the sharpened scores ``SHARPNESS * log support``: with them, the softmax that
     the balance matches to the *target* fractions is close to the argmax that decides (at
-    sharpness 1 diffuse supports missed a 0.2 target by 10 points; at 16, by 0.1). Kopf's histogram factor only
-    lowers the weight of a phase the block has too much of, by at most 1 / (1 + s); that
-    left porous80's pores at 6 % instead of 23 % at 32^3. A phase no square proposes
-    anywhere (support 0) stays out.
+    sharpness 1, diffuse supports miss the target widely). Kopf's histogram factor only
+    lowers the weight of a phase the block has too much of, by at most 1 / (1 + s): too
+    little to bring a minority phase back to its fraction (docs/design.md, "kopf's phase
+    balance"). A phase no square proposes anywhere (support 0) stays out.
     """
     logs = SHARPNESS * np.log(np.maximum(support.T, np.finfo(np.float64).tiny))
     return np.argmax(logs + project_bias(logs, target), axis=1)

@@ -20,7 +20,7 @@ from .projection import Projection
 class LevelHistogram:
     """Grey-level histograms of the exemplar and of the block at one level, on the finest
     exemplar's own values as bins (each value counts for the nearest), kept up to date as
-    voxels change (``kopf``'s re-weighting, thesis_spec §1.6.2).
+    voxels change (``kopf``'s re-weighting, Urs thesis, §3.4.1).
 
     With *views*, the block's histogram is also kept per slice of each of those views
     (``histogram="slice"``): :meth:`slice_fractions` gives, for voxels, the histogram of

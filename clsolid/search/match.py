@@ -9,7 +9,7 @@ weight 1 everywhere (full square) or 0 on the centre and the terms after it
 (:func:`causal_weights`, the L-shaped causal neighbourhood). With ``mismatch = n`` the
 first n terms of a row are phase codes (:mod:`clsolid.search.codes`) and each adds the
 weighted mismatch instead: 0 where the two codes are equal, else their sum. Only exemplar sites whose
-whole square lies inside the exemplar are candidates (thesis_spec §1: no wrap-around in
+whole square lies inside the exemplar are candidates (Urs thesis, §3.2.4: no wrap-around in
 the exemplar). The best match is the candidate of least distance, the lowest site index
 on a tie, on the device as in the reference: for integer grey levels every partial sum is
 an integer below 2^24, exact in float32, so the two agree exactly. The K nearest are
@@ -201,9 +201,10 @@ def candidate_sets(matcher: Any, table: np.ndarray, count: int, weights: np.ndar
 
 def _queries_per_item(device: Device, count: int) -> int:
     """Queries a work-item of ``k_nearest`` takes. On a CPU, 8 for the best match: each table
-    vector loaded then serves eight (``tools/bench_search.py`` on a Zen 5, Intel's runtime:
-    22 G terms/s at 1, 57 at 2, 86 at 4, 102 at 8). Otherwise 1: longer lists, and a GPU's
-    work-items, would hold eight queries' private arrays (not measured on a GPU yet)."""
+    vector loaded then serves eight, and the terms a second grow with the queries an item
+    takes up to eight (``tools/bench_search.py``; docs/design.md, "Queries per work-item").
+    Otherwise 1: longer lists, and a GPU's work-items, would hold eight queries' private
+    arrays (unmeasured on a GPU)."""
     return 8 if count == 1 and device.is_cpu else 1
 
 

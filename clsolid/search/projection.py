@@ -1,13 +1,13 @@
 """The seeding passes' search on principal components (``seed_components``).
 
-The coherence search's exhaustive first pass (``exact_passes``) costs more than the nine
+The coherence search's exhaustive first pass (``exact_passes``) costs more than all the
 passes among the candidates after it. Here it compares each voxel's neighbourhood with every
 exemplar site on the P leading principal components of the level's (weighted) sites only:
 the site nearest there is the voxel's match, and its distance is then taken on every term,
-as the exact search's is. The components hold most of a texture's neighbourhood (brick 64²,
-7 x 7 and its parent: 80 % of the variance in 8, 93 % in 16), so the site found is the exact
-one or one nearly as near; the matcher's time goes with the terms it sums (16 of 57: about
-a third). Squared differences only (phase codes are names, not coordinates).
+as the exact search's is. A few components hold most of the variance of a texture's
+neighbourhoods, so the site found is the exact one or one nearly as near, and the matcher's
+time goes with the terms it sums: P instead of every term (docs/design.md, "Seeding on
+principal components"). Squared differences only (phase codes are names, not coordinates).
 """
 
 from __future__ import annotations

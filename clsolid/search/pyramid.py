@@ -1,4 +1,4 @@
-"""The Gaussian pyramid of the search methods (thesis_spec §1.3): a 5-tap binomial low-pass
+"""The Gaussian pyramid of the search methods (Urs thesis, §3.2.3): a 5-tap binomial low-pass
 filter, [1 4 6 4 1] / 16 on each axis, then 2:1 decimation."""
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ def _blur(img: np.ndarray, mode: str) -> np.ndarray:
 def gaussian_pyramid(exemplar: np.ndarray, levels: int) -> list[np.ndarray]:
     """``levels`` images, finest first: level l+1 is level l filtered and decimated 2:1.
 
-    The exemplar is not toroidal (thesis_spec §1.4), so its edges are mirrored for the filter.
+    The exemplar is not toroidal (Urs thesis, §3.2.4), so its edges are mirrored for the filter.
     """
     pyr = [np.asarray(exemplar, np.float64)]
     for _ in range(levels - 1):

@@ -1,5 +1,5 @@
 """How often each exemplar site is used: the live histograms over sites that spread a
-block's matches over the exemplar (Chen & Wang 2010; thesis_spec §1.6.3).
+block's matches over the exemplar (Chen & Wang 2010; Urs thesis, §3.4.2-3.4.3).
 
 ``chen-wang`` keeps two (its index and position histograms, ``clsolid.search.chenwang``);
 the coherence search of ``wl`` and ``kopf`` keeps one, over its views' matches, to choose

@@ -1,4 +1,4 @@
-"""NP_WL's rule (thesis_spec §1.6.1): each view's best match, averaged, re-searched.
+"""NP_WL's rule (Urs thesis, §3.2.6.1): each view's best match, averaged, re-searched.
 
 At a voxel, each constrained view's neighbourhood (centre left out) is matched exactly
 against every exemplar site; the voxel takes the mean of the matched centre values; then,
