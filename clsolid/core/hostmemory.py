@@ -1,4 +1,4 @@
-"""The host's memory, checked before a run allocates anything (issue 12).
+"""The host's memory, checked before a run allocates anything.
 
 The host keeps the whole block while it is grown (its values, and per voxel the method's
 state: temperatures, sources, matches, the driver's copies), tiled or not: tiles bound the
@@ -15,18 +15,16 @@ import numpy as np
 from ..errors import HostMemoryError, InputError
 from ..exemplar import window_grid
 
-#: Host bytes a voxel of the full-resolution block costs at a run's peak, with some room
-#: over what was measured (porous50, Intel's CPU runtime, whose device buffers are host
-#: memory): the likelihood method, the growth of peak RSS from 128^3 to 192^3, 32 bytes in
-#: one piece and 16 in tiles, and 512^3 in tiles of 256 peaked at 44 bytes a voxel, all
-#: told; the search methods, from 96^3 to 128^3 with the coherence search, ``kopf`` 50 and
-#: ``chen-wang`` 81 (their estimate keeps 50 %). The drivers hold no whole-block index
-#: arrays (each conflict-free set is generated when it is relaxed,
-#: :func:`clsolid.core.schedule.colour_set`). With the state in a scratch folder
-#: (:mod:`clsolid.core.scratch`), the result's arrays and the ``+in`` mask there too, what
-#: stays in memory grew by 1.2 bytes a voxel (traced, from 40^3 to 64^3, the buffers bounded
-#: in size held small: a conflict-free set's indices, the views' scores of a tile); the
-#: files' pages count in the resident size too, but the system pages them out as it needs.
+#: Host bytes a voxel of the full-resolution block costs at a run's peak: the likelihood
+#: method, in one piece or in tiles (``"ml"``); a tiled likelihood run with its state, the
+#: result's arrays and the ``+in`` mask in a scratch folder (``"ml-scratch"``,
+#: :mod:`clsolid.core.scratch`: only buffers of bounded size stay in memory, a conflict-free
+#: set's indices, the views' scores of a tile; the files' pages count in the resident size
+#: too, but the system pages them out as it needs); the search methods (``"search"``, the
+#: most that ``chen-wang`` takes). Each is the growth of peak RSS with the block, measured
+#: where device buffers are host memory, with room kept above it (docs/design.md, "Host
+#: memory"). The drivers hold no whole-block index arrays (each conflict-free set is
+#: generated when it is relaxed, :func:`clsolid.core.schedule.colour_set`).
 BYTES_PER_VOXEL = {"ml": 48, "ml-scratch": 4, "search": 120}
 #: Disk bytes a voxel of a tiled likelihood run with a scratch folder takes there at its
 #: peak (:mod:`clsolid.core.scratch`): the random start (4) and the finest scale's start state
@@ -36,9 +34,9 @@ SCRATCH_BYTES_PER_VOXEL = 40
 #: Host bytes each term of the exemplar's windows costs the likelihood method (its sites at
 #: the finest scale times the window's terms, k^2 - 1): the windows of every scale in float64,
 #: their device copies, the distinct windows and their similar-window tables. Measured as
-#: the growth of peak RSS from a 256^2 to a 512^2 and a 1024^2 binary exemplar into 24^3 to
-#: 32^3 (11 x 11: 0.68, 1.73 and 6.19 GB; 46 and 48 bytes a term), with some room. A 1024^2
-#: exemplar takes about 7 GB whatever the block; the search methods' is not measured.
+#: the growth of peak RSS with the exemplar's side, with some room (docs/design.md, "Host
+#: memory"): a 1024^2 exemplar with 11 x 11 windows takes about 7 GB whatever the block.
+#: The search methods' is not measured.
 BYTES_PER_EXEMPLAR_TERM = 56
 
 #: Environment variable that overrides the memory thought available (bytes, or with a

@@ -1,4 +1,4 @@
-"""Visiting orders of a block's voxels for sequential relaxation (thesis App. B).
+"""Visiting orders of a block's voxels for sequential relaxation (Urs thesis, App. B).
 
 Each function returns the flat indices of a ``(Z, Y, X)`` block in visiting order (a
 permutation of ``range(Z * Y * X)``):

@@ -1,6 +1,6 @@
 """Where a run keeps its whole-block arrays: in memory, or in memory-mapped files on disk.
 
-A tiled run (issue 12) keeps the whole block's state on the host: its values, temperatures
+A tiled run keeps the whole block's state on the host: its values, temperatures
 and sources, 16 bytes a voxel with two views, and at the start of each scale the random start
 and the start state beside them; the driver's trusted and visited masks and the balance's
 labels, a byte a voxel each. In memory that bounds the block by the host's memory

@@ -1,6 +1,7 @@
 """``+in`` slices: exemplar slices written into the block at staggered depths of each
-constrained view, shared by the likelihood method (thesis_spec §2.8) and, as an anchor
-against mirror-image blocks, the search methods (docs/choices.md).
+constrained view, shared by the likelihood method (Urs thesis, §4.3.1, §4.3.5.1) and, as
+an anchor against mirror-image blocks, the search methods (docs/design.md, "Anchor
+slices").
 
 The functions take a *plan*: any parameters object with ``scales``, ``views`` (2 or 3),
 ``view_names``, ``slice_layout`` (``"aligned"`` or ``"staggered"``), ``insert_slices`` (a
@@ -43,12 +44,12 @@ FALLBACK_SPACING = 6.0
 #: longer than the exemplar), that many pixels on each side of the seam are left out (at least
 #: 1 at coarser scales), on exemplars whose seam shows (:func:`seam_ratio` above SEAM_SHOWS):
 #: the seam joins pixels that are not neighbours in the exemplar, and the likelihood sums only
-#: windows inside it. Brick's worst autocorrelation over seeds 1-4 fell from 0.37 to 0.27
-#: (docs/choices.md).
+#: windows inside it, so no window supports what the seam shows (docs/design.md, "Seam-free
+#: +in slices").
 SEAM_GAP = 2
-#: The :func:`seam_ratio` above which an exemplar's seam shows. The gallery's generated
-#: exemplars (made to wrap) measure 0.5-1.3, grass and gravel (photographs, fine-grained)
-#: 1.4, brick and tissue 2.9 and 3.1.
+#: The :func:`seam_ratio` above which an exemplar's seam shows: above what exemplars made to
+#: wrap and photographs of fine-grained textures measure, below what photographs of coarse
+#: textures do (docs/design.md, "Seam-free +in slices").
 SEAM_SHOWS = 2.0
 
 
@@ -130,7 +131,8 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, plan: Any, level: int
     slices of two views cross (a line), slice i of the view written first shows there if
     i + j is even, slice j of the other if it is odd, so that no view's slices carry all the
     foreign lines (written in view order, as aligned slices still are, every front slice
-    held the right slices' columns and scored worse; docs/gallery.md). Returns the mask
+    would hold the right slices' columns, and the front view match the exemplar worse;
+    docs/design.md, "Staggered +in slices"). Returns the mask
     of inserted voxels (marked in *mask*, an array of False of *vol*'s shape such as a scratch
     file's, if given); they start each scale trusted (t = 0), like inherited voxels: under
     ICM a voxel at t = 1 ignores its neighbours, so untrusted slices would be overwritten

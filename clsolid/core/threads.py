@@ -21,9 +21,9 @@ def serial_blas() -> Iterator[None]:
     The drivers' host work between kernel launches is small linear algebra (the label
     balance's Hessian, sampled voxels x labels, after every conflict-free set). A BLAS pool
     of several threads spins for cores that the OpenCL CPU runtime's threads hold, and
-    gains nothing on matrices this small: on a 2-core CPU it made brick's finest sweeps with
-    the balance up to three times slower. OpenBLAS splits a product by rows and columns,
-    not along the sum, so one thread gives the same results bit for bit.
+    gains nothing on matrices this small: it slows the sweeps with the balance several-fold
+    (docs/design.md, "The host's BLAS threads"). OpenBLAS splits a product by rows and
+    columns, not along the sum, so one thread gives the same results bit for bit.
     """
     with _controller().limit(limits=1, user_api="blas"):
         yield

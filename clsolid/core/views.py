@@ -1,7 +1,7 @@
 """The orthogonal views every method constrains, and how they sit in a ``(Z, Y, X)`` block.
 
 Axes are 0 = z, 1 = y, 2 = x. Front and right share y, the stacking axis of laminar
-textures (thesis_spec §1.1); top is the (z, x) plane.
+textures (Urs thesis, §6.3.1); top is the (z, x) plane.
 """
 
 #: View name -> (volume axis of the exemplar rows, volume axis of the exemplar columns).
