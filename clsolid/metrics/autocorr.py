@@ -1,4 +1,4 @@
-"""Normalised autocorrelation maps and the L2 distance between them (TIP section VI)."""
+"""Normalised autocorrelation maps and the L2 distance between them (Urs et al., TIP 2014, §VI)."""
 
 from __future__ import annotations
 

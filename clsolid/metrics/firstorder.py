@@ -99,13 +99,13 @@ def histogram_counts(values: np.ndarray, edges: np.ndarray) -> np.ndarray:
 
 
 def histogram_kl(counts_a: np.ndarray, counts_b: np.ndarray) -> float:
-    """Symmetric KL (thesis eq. 6.1) between two count vectors, with the stated pseudo-count."""
+    """Symmetric KL (Urs thesis, eq. 6.1) between two count vectors, with the stated pseudo-count."""
     return symmetric_kl(smoothed_probabilities(counts_a), smoothed_probabilities(counts_b))
 
 
 def histogram_distance(exemplar: Any, slices: Any, bins: int | None = None,
                        value_range: tuple[float, float] | None = None) -> float:
-    """Symmetric Kullback-Leibler divergence between grey-level histograms (thesis eq. 6.1).
+    """Symmetric Kullback-Leibler divergence between grey-level histograms (Urs thesis, eq. 6.1).
 
     ``D = sum_i (P_i - Q_i) ln(P_i / Q_i) = KL(P||Q) + KL(Q||P)``, P from the exemplar and Q
     from all slices pooled.

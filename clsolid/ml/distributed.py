@@ -1,4 +1,4 @@
-"""Dask (issue 12, point 4): the tiles of every conflict-free set as tasks on ``dask.distributed``
+"""Dask: the tiles of every conflict-free set as tasks on ``dask.distributed``
 workers, each worker with its own OpenCL device.
 
 :class:`DaskTiles` is a runner of :class:`clsolid.ml.tiled.TiledBackend`: the host keeps the

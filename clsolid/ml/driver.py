@@ -1,4 +1,5 @@
-"""The multi-scale ICM driver (thesis_spec §2.10), shared by the OpenCL and reference back ends."""
+"""The multi-scale ICM driver (Urs thesis, §4.2.6, §4.3; Urs et al., TIP 2014, Fig. 1), shared by
+the OpenCL and reference back ends."""
 
 from __future__ import annotations
 
@@ -28,7 +29,8 @@ log = logging.getLogger(__name__)
 
 def start_state(model: ScaleModel, base: np.ndarray, coarse: np.ndarray | None, params: MLParams, seed: int = 0,
                 scratch: Scratch | None = None):
-    """Volume and temperatures at the start of a scale (§2.7); t = 0 marks trusted voxels.
+    """Volume and temperatures at the start of a scale (Urs thesis, §4.3.5.2); t = 0 marks
+    trusted voxels.
 
     The random start *base* (full resolution) is decimated; the coarser scale's result is
     copied in (1/8 or 8/8), then the ``+in`` slices get this scale's exemplar. Both arrays are
@@ -273,7 +275,7 @@ def run_ml(
 
     Each sweep draws its random numbers from Philox keyed by *seed*, counter (x, y, z,
     :func:`clsolid.core.philox.relax_tag` (level, sweep)). Under ``relaxation="annealing"``
-    there are no voxel temperatures (every neighbour counts fully, TIP14 Fig. 1) and
+    there are no voxel temperatures (every neighbour counts fully, Urs et al., TIP 2014, Fig. 1) and
     every voxel is visited in every sweep (trusted ones too, unless ``inherited="fixed"``);
     the global temperature t_in starts each scale at ``anneal_start`` and is multiplied by
     ``anneal_cooling`` after each sweep, and the stop rule applies to it.

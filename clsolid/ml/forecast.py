@@ -1,16 +1,15 @@
 """How many sweeps a scale will take, known before it runs (for the ETA).
 
 Under ICM and Gibbs relaxation a voxel's temperature becomes ``max(0, (xi + sum_r t_r) /
-|N|)`` over its neighbours (thesis_spec §2.4), whatever labels it or they hold; which
+|N|)`` over its neighbours (Urs thesis, §4.2.5, eq. 4.9), whatever labels it or they hold; which
 voxels a sweep visits and in what order follow from the temperatures, the trusted voxels
 and the seed alone. So the whole temperature trajectory of a scale can be replayed
 without a single likelihood: the same conflict-free sets, in the same seeded order, with
 the float64 reference's temperature update. The replay costs one neighbourhood sum per
 voxel and sweep, against the run's sum over every exemplar site; but it runs in NumPy, on
-one core, and the pruned sum is cheap: at 512^3 with 9 x 9 views (153 neighbours) the
-finest scale's replay ran for more than 35 minutes before its first sweep (measured with
-``tools/bench_scale.py --cases 64:512``), and at 128^3 with 11 x 11 views it took 43 s of a
-102 s run. So a scale whose sweep would sum more than
+one core, and the pruned sum is cheap: on a large block the finest scale's replay would
+take a large share of the run, all of it before the first sweep (docs/design.md, "The
+ETA's replay"). So a scale whose sweep would sum more than
 :data:`REPLAY_TERMS` neighbour terms is not replayed (:func:`affordable`); a smaller block
 with the same structure is replayed in its place (:func:`proxy_visits`): the same rule,
 inherited corners and ``+in`` slice spacing, on a torus of a side that fits the budget,
@@ -33,9 +32,9 @@ from .reference import new_temperature
 
 #: Most neighbour terms (voxels x neighbours in the union of the views) a replayed sweep may
 #: sum: 2^26, an 11 x 11 run up to about 65^3 (241 neighbours), 9 x 9 to 74^3; a larger scale
-#: replays a proxy of that side, a second or two. (It was 2^30, up to 167^3: at 128^3 the replay
-#: then took 40 % of a pruned run. At 2^24, a 41^3 proxy for 64^3, brick's ETA after the first
-#: finest sweep was 20 % under, against 0 % replayed whole.)
+#: replays a proxy of that side, a second or two. A larger budget makes the replay a sizeable
+#: share of a pruned run; a smaller one, a proxy too small to forecast the run's sweeps
+#: (docs/design.md, "The ETA's replay").
 REPLAY_TERMS = 2**26
 
 

@@ -1,7 +1,7 @@
 """What both back ends of the ML method share at one scale: geometry, exemplar tables, bandwidth.
 
 Everything here is plain NumPy and is computed once per scale. The Parzen estimate of
-thesis_spec §2.2 (TIP14 eqs. 3-9) for voxel s, view v and label lambda is
+Urs thesis, §4.2.2 (Urs et al., TIP 2014, eqs. 3-9) for voxel s, view v and label lambda is
 
     f_v(lambda) = sum_p exp(-[(lambda - c_p)^2 + A_p] / 2h^2),
     A_p = sum_r ((1 - t_r) (x_r - y_{p,r}))^2,
@@ -95,7 +95,7 @@ def parent_tables(coarse_exemplar: np.ndarray, shape: tuple[int, int], half: int
 def exemplar_tables(exemplar: np.ndarray, half: int) -> tuple[np.ndarray, np.ndarray]:
     """Centre values ``(n,)`` and neighbour values ``(R, n)`` of every valid exemplar site.
 
-    Valid sites are those whose window lies inside the exemplar (no wrap-around, eq. 4.5);
+    Valid sites are those whose window lies inside the exemplar (no wrap-around, Urs thesis, eq. 4.5);
     they are enumerated row-major by window position.
     """
     k = 2 * half + 1
@@ -213,7 +213,7 @@ def term_weights(offsets: np.ndarray, sigma: float, shared: float, profile: str 
 
 
 def silverman(sigma: float, n: int, d: int) -> float:
-    """Silverman's bandwidth ``sigma * (4 / (n (d + 2)))^(1 / (d + 4))`` (TIP14 eq. 6)."""
+    """Silverman's bandwidth ``sigma * (4 / (n (d + 2)))^(1 / (d + 4))`` (Urs et al., TIP 2014, eq. 6)."""
     return float(sigma * (4.0 / (n * (d + 2))) ** (1.0 / (d + 4)))
 
 
@@ -232,7 +232,8 @@ def nearest_label(values: np.ndarray, labels: np.ndarray) -> np.ndarray:
 
 
 def scale_exemplar(labels_img: np.ndarray, level: int, pyramid: str = "binomial", phases: bool = False) -> np.ndarray:
-    """The exemplar of scale *level*, ``ceil(H / 2^level) x ceil(W / 2^level)`` (thesis_spec §2.5).
+    """The exemplar of scale *level*, ``ceil(H / 2^level) x ceil(W / 2^level)``
+    (Urs thesis, §4.2.4, §4.3.1).
 
     ``"decimate"`` keeps the even pixels. ``"binomial"`` smooths with [1 2 1]/4 before each
     halving, so thin features survive as fainter ones instead of vanishing where they fall

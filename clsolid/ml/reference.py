@@ -69,7 +69,7 @@ def parzen(model: ScaleModel, a: np.ndarray, keep: np.ndarray | None = None) -> 
 
 
 def normalise(logf: np.ndarray) -> np.ndarray:
-    """Log LCPDF normalised over the labels (eq. 4.4)."""
+    """Log LCPDF normalised over the labels (Urs thesis, eq. 4.4)."""
     return logf - logsumexp(logf, axis=1)[:, None]
 
 
@@ -118,7 +118,8 @@ def draw(score: np.ndarray, r: np.ndarray) -> np.ndarray:
 
 
 def accept(s_new: np.ndarray, s_cur: np.ndarray, t_in: float, q: np.ndarray) -> np.ndarray:
-    """Annealing (TIP14 Fig. 1): accept where ``p = exp(s_new - s_cur) > 1`` or ``p * t_in > q``.
+    """Annealing (Urs et al., TIP 2014, Fig. 1): accept where ``p = exp(s_new - s_cur) > 1``
+    or ``p * t_in > q``.
 
     Log scores within the tie tolerance of each other count as equal (p = 1).
     """
@@ -141,7 +142,7 @@ def unbiased_score(code: int, logl: np.ndarray) -> np.ndarray:
 def relax(relaxation: str, code: int, logl: np.ndarray, labels: np.ndarray, x: np.ndarray,
           words: np.ndarray | None = None, t_in: float = 1.0, bias: np.ndarray | None = None) -> np.ndarray:
     """New values of voxels whose current values are ``x`` ``(m,)``, from their normalised
-    per-view log LCPDFs ``logl`` ``(views, m, L)`` (thesis_spec §2.3).
+    per-view log LCPDFs ``logl`` ``(views, m, L)`` (Urs thesis, §4.2.3-4.2.6).
 
     ``relaxation`` is ``"icm"`` (argmax), ``"gibbs"`` (a draw from the combined, normalised
     LCPDF) or ``"annealing"`` (a uniform proposal lambda, kept if p = P(lambda)/P(x) > 1 or
@@ -178,7 +179,8 @@ def relax(relaxation: str, code: int, logl: np.ndarray, labels: np.ndarray, x: n
 
 
 def new_temperature(model: ScaleModel, temp: np.ndarray, voxels: np.ndarray, xi: float) -> np.ndarray:
-    """``max(0, (xi + sum_r t_r) / |N|)`` over the union of the views' neighbourhoods (eq. 4.9)."""
+    """``max(0, (xi + sum_r t_r) / |N|)`` over the union of the views' neighbourhoods (Urs
+    thesis, eq. 4.9)."""
     nb = wrapped_coords(voxels, model.shape, model.union_offsets)
     total = temp.ravel()[nb].astype(np.float64).sum(axis=1)
     return np.maximum(0.0, (xi + total) / model.union_offsets.shape[0])

@@ -1,4 +1,4 @@
-"""Tiles (issue 12, point 2): a volume larger than the device holds, synthesised a tile at a time.
+"""Tiles: a volume larger than the device holds, synthesised a tile at a time.
 
 The host keeps the whole volume, its temperatures and its sources; the device keeps a scale's
 exemplar tables once and the state of one tile, its halo included (:mod:`clsolid.core.tiles`),
