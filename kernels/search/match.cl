@@ -222,8 +222,8 @@ __kernel void coherence_best(__global const float *vol, int vz, int vy, int vx,
         for (int b = 0; b < 3; ++b) {
             const int s = matched[base + row + wrap(pos[col_axis] + b - 1, dims[col_axis]) * stride[col_axis]];
             const int sh = shift[(s < 0 ? n_sites : s) * 9 + a * 3 + b];
-            /* neighbours that continue one match propose one set: measured once (on brick
-             * 64^3, about 5.6 distinct of the 9) */
+            /* neighbours that continue one match propose one set: it is measured once (the
+             * 9 neighbours usually propose only a few distinct sets) */
             bool again = sh < 0;
             for (int j = 0; j < n_proposed; ++j)
                 again |= proposed[j] == sh;
