@@ -1,4 +1,4 @@
-"""Real sizes (issue 12, point 5): the likelihood method's cost against exemplar and volume size,
+"""Real sizes: the likelihood method's cost against exemplar and volume size,
 with the exact and the pruned Parzen sum.
 
 For each case (exemplar side : cube side) and likelihood, grows a gallery exemplar with the

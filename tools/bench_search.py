@@ -1,5 +1,6 @@
 """Benchmark of the search methods' exact matcher (clsolid.search.match), the brute force
-that issue 11's methods and their accelerated searches are measured against.
+that the search methods (wl, kopf, chen-wang) and their accelerated searches are measured
+against.
 
 Matches random queries (exemplar windows plus noise, as a half-synthesized volume gives)
 against every complete neighbourhood of brick 64x64 at 32 grey levels, on the device and,

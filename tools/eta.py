@@ -1,5 +1,5 @@
-"""How right the progress ETA is (issue 12, point 6: within 20 % after the first sweep of
-the finest scale).
+"""How right the progress ETA is (its aim: within 20 % after the first sweep of the finest
+scale).
 
 Grows each exemplar with the defaults (or --set NAME=VALUE), records the ETA reported after
 every sweep, and compares it with the time the run then actually took. Prints, per

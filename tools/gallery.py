@@ -47,7 +47,7 @@ VIEWS = metrics.VIEWS
 #: The calibrated scores reported per view: (key in clsolid.metrics.evaluate, column title).
 SCORES = (("histogram_kl", "hist"), ("patch_sw", "patch"), ("autocorrelation_l2", "autocorr"), ("s2_l2", "S2"),
           ("c2_l2", "C2"))
-#: Targets of issue 10: (key, label, limit, whether the value must stay strictly below it).
+#: The gallery's targets: (key, label, limit, whether the value must stay strictly below it).
 TARGETS = (
     ("phase_error_pp", "every phase within 3 pp", 3.0, False),
     ("histogram_kl", "histogram <= 0.1", 0.1, False),
@@ -56,13 +56,13 @@ TARGETS = (
     ("mirror", "mirror <= 0.1", 0.1, False),
     ("copy", "no slice >= 90 % copied", 0.9, True),
 )
-#: A method's own stricter targets, counted beside issue 10's: issue 11's for `kopf`, whose
-#: histogram re-weighting is to keep the phases within 2 points and the histogram within 0.05.
+#: A method's own stricter targets, counted beside :data:`TARGETS`: `kopf`'s histogram
+#: re-weighting is to keep the phases within 2 points and the histogram within 0.05.
 METHOD_TARGETS = {
     "kopf": (("phase_error_pp", "every phase within 2 pp (issue 11, kopf)", 2.0, False),
              ("histogram_kl", "histogram <= 0.05 (issue 11, kopf)", 0.05, False)),
 }
-#: Yardsticks of our own, counted the same way but not targets of issue 10.
+#: Yardsticks of our own, counted the same way but not targets.
 YARDSTICKS = (
     ("c2_l2", "connectedness C2 <= 0.3 (not an issue target)", 0.3, False),
     ("stretch", "stretch within 1.25x (not an issue target)", 1.25, False),
@@ -201,7 +201,7 @@ def _fmt(x: float | None, digits: int = 2) -> str:
 
 
 def target_counts(rows: dict[str, dict], method: str = "ml") -> list[tuple[str, str, str]]:
-    """For every target (issue 10's, then *method*'s own) and yardstick: its label, how many of
+    """For every target (the gallery's, then *method*'s own) and yardstick: its label, how many of
     *rows* meet it of those judged ("k/n"), and how many could not be judged and why ("" if none)."""
     out = []
     for key, label, limit, strict in TARGETS + METHOD_TARGETS.get(method, ()) + YARDSTICKS:

@@ -8,14 +8,15 @@ fields on the gallery's cube (toroidal), whose correlation in every vertical sec
 direction about y: the material a two-view synthesis (front and right views sharing y)
 should grow. Each field is scored with ``clsolid.metrics.mirror_correlation`` (each y-plane's
 mean subtracted first, as the gallery does), giving the mean, the standard deviation, the
-90th percentile and how often the issue's 0.1 is passed by the material itself.
+90th percentile and how often the gallery's mirror target, 0.1, is passed by the material
+itself.
 
 The covariance is built from the exemplar's periodic autocorrelation: at the lag
 (dz, dy, dx), that of the exemplar at (dy, sqrt(dx^2 + dz^2)), interpolated along x; the
 spectrum's negative values (the construction is not always positive definite) are set to
-0. Threshold a field and the spread barely moves (checked: binary fields thresholded at
-50 % against the Gaussian ones of the same correlation, sd 0.056 against 0.061 predicted
-from the Gaussian formula sqrt(2 sum rho^2 / N)).
+0. Threshold a field and the spread barely moves: binary fields thresholded at their median
+scatter about as much as the Gaussian formula sqrt(2 sum rho^2 / N) predicts for Gaussian
+fields of the same correlation.
 
 With ``--gallery`` a gallery.json (tools/gallery.py) is read as well, and each exemplar's
 worst mirror correlation is printed beside the spread, in standard deviations above the mean.

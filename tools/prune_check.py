@@ -1,4 +1,4 @@
-"""Can the likelihood be pruned? (issue 12, point 1: measure before building it.)
+"""Can the likelihood be pruned, and at what candidate count?
 
 The Parzen LCPDF of a voxel sums over every exemplar site. This measures, in float64, how
 far the LCPDF moves when the sum keeps only the K sites whose neighbourhoods are nearest to

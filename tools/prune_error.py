@@ -1,4 +1,4 @@
-"""How far is the pruned likelihood from the exact one, in a real run? (issue 12, point 1)
+"""How far is the pruned likelihood from the exact one, in a real run?
 
 Grows each exemplar with ``likelihood="pruned"`` on an OpenCL device. Before the first
 conflict-free set of every sweep, a sample of that set's voxels is read back (volume,
