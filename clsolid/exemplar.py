@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import skimage.data
 
+from .core.geometry import window_grid  # noqa: F401 (where the exemplar's windows lie)
 from .errors import InputError
 from .volumeio import VOLUME_WRITE_SUFFIXES, _read_any
 
@@ -306,12 +307,6 @@ class LevelMap:
     def to_values(self, labels: np.ndarray) -> np.ndarray:
         """Map label indices back to the exemplar's values (and dtype)."""
         return self.values[labels]
-
-
-def window_grid(shape: tuple[int, ...], neighborhood: int) -> tuple[int, int]:
-    """``(rows, columns)`` of the sites of an exemplar of *shape* whose ``neighborhood``-square
-    window lies wholly inside it (none wraps round); their count is the product."""
-    return max(0, shape[0] - neighborhood + 1), max(0, shape[1] - neighborhood + 1)
 
 
 def nearest_level_index(values: Any, levels: np.ndarray) -> np.ndarray:

@@ -1,143 +1,27 @@
-"""``clsolid evaluate``: compare a volume with its exemplar, print a table, write JSON and a PNG.
+"""The evaluation report: reading a volume and its sidecar, the table, the figures.
 
 The numbers come from :func:`clsolid.metrics.evaluate`; this module reads the files, formats
-the table, and draws the report and convergence-track figures. Plotting needs matplotlib,
-an optional extra (``pip install "clsolid[report]"``); everything else works without it.
+the table, and draws the report and convergence-track figures (``clsolid evaluate``,
+:mod:`clsolid.cli.evaluate`). Plotting needs matplotlib, an optional extra
+(``pip install "clsolid[report]"``); everything else works without it.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import pathlib
-import sys
 from typing import Any
 
 import numpy as np
 
-from .errors import ClsolidError, InputError
-from .metrics import VIEWS, evaluate
+from .errors import ClsolidError, InputError, MissingDependencyError
 
-#: Exit codes of :func:`main_evaluate`.
-EXIT_OK, EXIT_INPUT, EXIT_NO_MATPLOTLIB = 0, 2, 3
 INSTALL_HINT = 'install it with pip install "clsolid[report]" or pip install matplotlib'
 
 
-class PlottingUnavailable(ClsolidError, ImportError):
+class PlottingUnavailable(MissingDependencyError):
     """matplotlib, needed to draw a figure, is not installed."""
-
-
-# ----------------------------------------------------------------------------- arguments
-
-
-def add_evaluate_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add the ``evaluate`` sub-command's arguments to ``parser``.
-
-    Parameters
-    ----------
-    parser : argparse.ArgumentParser
-        The sub-parser the CLI created for ``evaluate``.
-    """
-    parser.add_argument("exemplar", nargs="?", metavar="EXEMPLAR",
-                        help="2D exemplar image (.npy, .tif/.tiff, .png)")
-    parser.add_argument("volume", nargs="?", metavar="VOLUME", help="3D (Z, Y, X) volume (.npy, .tif/.tiff)")
-    parser.add_argument("--views", nargs="+", choices=VIEWS, default=list(VIEWS),
-                        help="views to report (default: all three)")
-    parser.add_argument("--constrained", nargs="*", choices=VIEWS, default=["front", "right"],
-                        help="views the synthesis constrained, for labelling (default: front right)")
-    parser.add_argument("--levels", type=int, default=None,
-                        help="quantise both into this many grey levels before the histogram "
-                             "statistics (default: as `clsolid synth` made VOLUME, read from its "
-                             "JSON sidecar; without one, the grey levels as they are)")
-    parser.add_argument("-o", "--output", metavar="REPORT.json", help="write the full report as JSON")
-    parser.add_argument("--plot", metavar="REPORT.png", help="draw the report as a PNG (needs matplotlib)")
-    parser.add_argument("--track", metavar="TRACK.json",
-                        help="a convergence track to summarise (and plot with --plot)")
-    parser.add_argument("--max-slices", type=int, default=16,
-                        help="slices per view, evenly spaced (default 16; 0 = all)")
-    parser.add_argument("--keep-inserted", action="store_true",
-                        help="measure the +in (or anchor) slices too; by default those of a `clsolid "
-                             "synth` volume, read from its JSON sidecar, are left out: they start as "
-                             "exemplar copies and would flatter their view's scores")
-    parser.add_argument("--repeats", type=int, default=5,
-                        help="random halves and shuffles per reference (default 5; 0 = none)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the references (default 0)")
-    parser.add_argument("--non-periodic", action="store_true",
-                        help="the volume does not wrap around (default: it does)")
-
-
-def main_evaluate(args: argparse.Namespace) -> int:
-    """Run ``clsolid evaluate`` with parsed arguments.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        As produced by a parser set up with :func:`add_evaluate_arguments`.
-
-    Returns
-    -------
-    int
-        0 on success, 2 for a usage or input error (message on stderr), 3 when ``--plot``
-        is asked for and matplotlib is missing.
-    """
-    try:
-        if args.plot:
-            _require_matplotlib()
-        if args.exemplar is not None or args.volume is not None or args.track is None:
-            _run_evaluation(args)
-        if args.track is not None:
-            _run_track(args)
-    except PlottingUnavailable as err:
-        print(f"clsolid evaluate: {err}", file=sys.stderr)
-        return EXIT_NO_MATPLOTLIB
-    except (InputError, OSError) as err:
-        print(f"clsolid evaluate: error: {err}", file=sys.stderr)
-        return EXIT_INPUT
-    return EXIT_OK
-
-
-def _run_evaluation(args: argparse.Namespace) -> None:
-    if args.exemplar is None or args.volume is None:
-        raise InputError("EXEMPLAR and VOLUME are both required (or give only --track FILE.json)")
-    if args.max_slices is not None and args.max_slices < 0:
-        raise InputError(f"--max-slices={args.max_slices} must be >= 0 (0 = all slices)")
-    exemplar = load_exemplar(args.exemplar)
-    volume = load_volume(args.volume)
-    sidecar, meta = read_sidecar(args.volume)
-    levels = args.levels
-    if levels is None:
-        exemplar, levels, note = like_with_like(exemplar, sidecar, meta)
-        if note:
-            print(note)
-    exclude: dict = {}
-    if not args.keep_inserted:
-        exclude, note = inserted_from_sidecar(sidecar, meta, volume.shape)
-        if note:
-            print(note)
-    report = evaluate(exemplar, volume, views=args.views, constrained=args.constrained or (),
-                      levels=levels, max_slices=args.max_slices or None, rng=args.seed,
-                      reference_repeats=args.repeats, periodic=not args.non_periodic, exclude=exclude)
-    report["files"] = {"exemplar": str(args.exemplar), "volume": str(args.volume)}
-    print(format_table(report))
-    if args.output:
-        with open(args.output, "w", encoding="utf-8") as fh:
-            json.dump(report, fh, indent=1, allow_nan=False)
-        print(f"report written to {args.output}")
-    if args.plot:
-        plot_report(report, args.plot)
-        print(f"plot written to {args.plot}")
-
-
-def _run_track(args: argparse.Namespace) -> None:
-    track = load_track(args.track)
-    print(format_track(track))
-    if args.plot:
-        path = pathlib.Path(args.plot)
-        if args.exemplar is not None:  # the report took --plot: the track goes next to it
-            path = path.with_name(f"{path.stem}_track{path.suffix or '.png'}")
-        plot_track(track, path)
-        print(f"track plot written to {path}")
 
 
 # ----------------------------------------------------------------------------- reading

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import logging
 import pathlib
 import warnings
 from numbers import Real
@@ -236,27 +237,55 @@ def image_pixel_size(path: PathLike) -> tuple[tuple[float, float], str] | None:
     p = pathlib.Path(path)
     if p.suffix.lower() not in (".tif", ".tiff") or not p.is_file():
         return None
-    try:
-        with tifffile.TiffFile(p) as tif:
-            return _tiff_pixel_size(tif)
-    except (OSError, ValueError, tifffile.TiffFileError):
-        return None
+    with _TiffComplaints():
+        try:
+            with tifffile.TiffFile(p) as tif:
+                return _tiff_pixel_size(tif)
+        except (OSError, ValueError, tifffile.TiffFileError):
+            return None
+
+
+class _TiffComplaints(logging.Handler):
+    """Holds what tifffile logs while a file is read, instead of letting it reach the terminal:
+    a damaged file makes it log a line per bad tag, and the reader's own error says enough."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.DEBUG)
+        self.messages: list[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.messages.append(record.getMessage())
+
+    def __enter__(self) -> "_TiffComplaints":
+        self._logger = logging.getLogger("tifffile")
+        self._propagate = self._logger.propagate
+        self._logger.addHandler(self)
+        self._logger.propagate = False
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self._logger.removeHandler(self)
+        self._logger.propagate = self._propagate
 
 
 def _read_tiff(path: pathlib.Path, param: str) -> tuple[np.ndarray, dict]:
     """Read a TIFF as stored (a stack as ``(Z, Y, X)``) with its calibration."""
-    try:
-        with tifffile.TiffFile(path) as tif:
-            data = tif.asarray()
-            info, props = _tiff_info(tif)
-            if tif.is_ome and not tif.is_imagej:
-                info.update(_ome_info(tif.ome_metadata))
-            ome_stack = info.pop("ome_stack", False)
-    except (OSError, ValueError, tifffile.TiffFileError) as exc:
-        raise InputError(
-            f"{param} {str(path)!r} could not be read as a TIFF file ({exc}); "
-            "check that the file is a valid TIFF"
-        ) from exc
+    with _TiffComplaints() as complaints:
+        try:
+            with tifffile.TiffFile(path) as tif:
+                data = tif.asarray()
+                info, props = _tiff_info(tif)
+                if tif.is_ome and not tif.is_imagej:
+                    info.update(_ome_info(tif.ome_metadata))
+                ome_stack = info.pop("ome_stack", False)
+        except (OSError, ValueError, tifffile.TiffFileError) as exc:
+            raise InputError(
+                f"{param} {str(path)!r} could not be read as a TIFF file ({exc}); "
+                "check that the file is a valid TIFF"
+            ) from exc
+    if complaints.messages and data.size == 0:
+        raise InputError(f"{param} {str(path)!r} is a damaged TIFF: {len(complaints.messages)} of its tags could "
+                         f"not be read (the first: {complaints.messages[0]}) and it holds no image; check the file")
     # tifffile squeezes a one-slice stack to 2D; our marker (an OME stack's axes) says it was a volume.
     if data.ndim == 2 and (props.get(_PROP_AXES) == "ZYX" or ome_stack):
         data = data[np.newaxis]

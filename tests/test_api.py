@@ -74,6 +74,8 @@ def test_bandwidth_is_a_fraction_of_silverman_per_scale(brick_labels):
     (np.arange(256.0).reshape(16, 16), (4, 0, 4), "shape"),
     (np.arange(256.0).reshape(16, 16), (4, -2, 4), "shape"),
     (np.arange(256.0).reshape(16, 16), (4, 4), "shape"),
+    (np.arange(256.0).reshape(16, 16), (16, 16, True), "shape"),
+    (np.arange(256.0).reshape(16, 16), (16, 16, 2.5), "shape"),
     ("no-such-texture", (4, 4, 4), "exemplar"),
 ])
 def test_bad_input_is_refused_clearly(exemplar, shape, word):
@@ -89,10 +91,39 @@ def test_exemplar_too_small_for_coarsest_scale():
 
 def test_unknown_option_and_method():
     ex = np.arange(256.0).reshape(16, 16)
-    with pytest.raises(InputError, match="unknown option"):
-        clsolid.synthesize(ex, (4, 4, 4), device="reference", temprature=3, **SMALL)
+    with pytest.raises(InputError, match="unknown option 'relaxaton' .*did you mean 'relaxation'"):
+        clsolid.synthesize(ex, (4, 4, 4), device="reference", relaxaton="icm", **SMALL)
     with pytest.raises(InputError, match="method='tsvq' is not available"):
         clsolid.synthesize(ex, (4, 4, 4), method="tsvq", device="reference", **SMALL)
+    with pytest.raises(InputError, match="iterations=3 is an option of method 'wl', not of 'ml'"):
+        clsolid.synthesize(ex, (4, 4, 4), device="reference", iterations=3, **SMALL)
+    with pytest.raises(InputError, match="heuristic='h1-mean' is an option of method 'ml', not of 'kopf'"):
+        clsolid.synthesize(ex, (4, 4, 4), method="kopf", device="reference", heuristic="h1-mean")
+    with pytest.raises(InputError, match="backend= is the likelihood method's"):
+        clsolid.synthesize(ex, (4, 4, 4), method="kopf", device="reference", backend={"tile": 4})
+    with pytest.raises(InputError, match="unknown option 'tiles' .*did you mean 'tile'"):
+        clsolid.synthesize(ex, (4, 4, 4), device="reference", backend={"tiles": 4}, **SMALL)
+
+
+def test_params_object_and_options_together():
+    ex = np.arange(256.0).reshape(16, 16)
+    params = MLParams(neighborhood=3, scales=1, levels=8)
+    a = clsolid.synthesize(ex, (4, 4, 4), device="reference", rng=1, params=params, relaxation="icm")
+    b = clsolid.synthesize(ex, (4, 4, 4), device="reference", rng=1, relaxation="icm", **SMALL)
+    np.testing.assert_array_equal(a, b)
+    with pytest.raises(InputError, match="are not method 'kopf'"):
+        clsolid.synthesize(ex, (4, 4, 4), method="kopf", device="reference", params=params)
+
+
+def test_a_device_that_is_not_a_name_is_refused_clearly():
+    with pytest.raises(InputError, match="device=0 must be a string"):
+        clsolid.synthesize("brick", (16, 16, 16), device=0)
+
+
+def test_a_constant_exemplar_warns():
+    with pytest.warns(clsolid.ExemplarWarning, match="constant"):
+        volume = clsolid.synthesize(np.full((16, 16), 7, np.uint8), (4, 4, 4), device="reference", **SMALL)
+    assert (volume == 7).all()
 
 
 def test_memory_is_checked_before_allocating(device, monkeypatch):
@@ -211,7 +242,7 @@ def test_volume_in_the_exemplar_units(name, image, exact):
                                            ("max_batch", -5)])
 def test_bad_tuning_options(device, option, value):
     with pytest.raises(InputError, match=option):
-        clsolid.synthesize("brick", (8, 8, 8), device=device, **SMALL, **{option: value})
+        clsolid.synthesize("brick", (8, 8, 8), device=device, backend={option: value}, **SMALL)
 
 
 def test_progress_carries_the_scale_exemplar(device):

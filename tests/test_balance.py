@@ -1,4 +1,4 @@
-"""The label-histogram balance (clsolid.ml.balance): the dual projection reaches the target
+"""The label-histogram balance (clsolid.balance): the dual projection reaches the target
 fractions, the sweep target accounts for the voxels left alone, and a run keeps the
 exemplar's fractions where the published form does not."""
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from clsolid.ml.balance import MAX_BIAS, OFF_BIAS, n_score_slots, project_bias, score_stride, softmax, sweep_target
+from clsolid.balance import MAX_BIAS, OFF_BIAS, n_score_slots, project_bias, score_stride, softmax, sweep_target
 from clsolid.ml.opencl import CLBackend
 from clsolid.gallery import gallery_exemplar
 from clsolid.ml.params import MLParams
@@ -108,9 +108,9 @@ def test_the_balance_reads_a_sets_values_and_score_rows_as_the_whole_would_give(
     """After every set the balance reads only that set's values and score rows (a gather on
     the device, not the whole block): the same numbers as the whole block's arrays."""
     from clsolid.ml.reference import ReferenceBackend
-    from clsolid.ml.tiled import TiledBackend
+    from clsolid.ml.tiled import LocalTiles, TiledBackend
 
-    backend = {"opencl": lambda: CLBackend(device), "tiled": lambda: TiledBackend(CLBackend(device), 8),
+    backend = {"opencl": lambda: CLBackend(device), "tiled": lambda: TiledBackend(LocalTiles(CLBackend(device)), 8),
                "reference": ReferenceBackend}[kind]()
     labels = np.where(gallery_exemplar("porous80", 64)[:32, :32] > 0, 0.0, 1.0)
     run_ml(labels, (12, 12, 12), MLParams(neighborhood=5, scales=1, sweeps=1), 3, backend)

@@ -12,6 +12,7 @@ import clsolid
 from clsolid.cli import EXIT_USAGE, main
 from clsolid.core import checkpoint as checkpoint_module
 from clsolid.core.checkpoint import META, STATE, CheckpointError, read_checkpoint, write_checkpoint
+from clsolid.errors import InputError
 
 KW = dict(neighborhood=5, scales=2, rng=4)
 SHAPE = (12, 12, 12)
@@ -31,7 +32,8 @@ def _interrupted(tmp_path, device, after: int, **kw) -> tuple[np.ndarray, object
             raise Stop
 
     with pytest.raises(Stop):
-        clsolid.synthesize("gravel", SHAPE, checkpoint=tmp_path / "ck", progress=stop, device=device, **KW, **kw)
+        clsolid.synthesize("gravel", SHAPE, backend={"checkpoint": tmp_path / "ck"}, progress=stop, device=device, **KW,
+                           **kw)
     return tmp_path / "ck"
 
 
@@ -79,7 +81,8 @@ def test_reference_back_end_resumes_identically(tmp_path):
             raise Stop
 
     with pytest.raises(Stop):
-        clsolid.synthesize("gravel", (6, 6, 6), device="reference", checkpoint=tmp_path, progress=stop, **kw)
+        clsolid.synthesize("gravel", (6, 6, 6), device="reference", backend={"checkpoint": tmp_path}, progress=stop,
+                           **kw)
     np.testing.assert_array_equal(clsolid.resume(tmp_path, device="reference"), whole)
 
 
@@ -99,8 +102,9 @@ def test_bad_checkpoints_are_refused(tmp_path, device):
     (tmp_path / "other" / META).write_text(json.dumps({**meta, "format": 99}))
     with pytest.raises(CheckpointError, match="format 99"):
         read_checkpoint(tmp_path / "other")
-    with pytest.raises(CheckpointError, match="checkpoint_every"):
-        clsolid.synthesize("gravel", (8, 8, 8), checkpoint=tmp_path / "x", checkpoint_every=-1, device=device)
+    with pytest.raises(InputError, match="checkpoint_every"):
+        clsolid.synthesize("gravel", (8, 8, 8), backend={"checkpoint": tmp_path / "x", "checkpoint_every": -1},
+                           device=device)
     assert isinstance(CheckpointError("x"), clsolid.InputError)
 
 

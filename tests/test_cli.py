@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from clsolid.cli import EXIT_MEMORY, EXIT_NO_DEVICE, EXIT_USAGE, main
+from clsolid.cli import EXIT_MEMORY, EXIT_NO_DEVICE, EXIT_OUTPUT, EXIT_USAGE, main
 from clsolid.volumeio import load_volume
 
 FAST = ["--shape", "8", "10", "12", "--neighborhood", "3", "--scales", "2", "--levels", "8", "--seed", "3"]
@@ -261,7 +261,7 @@ def test_volume_is_rescued_when_the_output_fails_late(tmp_path, capsys, monkeypa
 
     monkeypatch.setattr(clsolid.volumeio, "save_volume", full_disk)
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
-    assert main(["synth", "brick", "-o", str(tmp_path / "v.tif"), *FAST, "-q", "--indices"]) == 1
+    assert main(["synth", "brick", "-o", str(tmp_path / "v.tif"), *FAST, "-q", "--indices"]) == EXIT_OUTPUT
     err = capsys.readouterr().err
     assert "No space left on device" in err and "the volume is saved in" in err
     rescued = list(tmp_path.glob("clsolid-rescued-seed3-*.npy"))

@@ -212,7 +212,7 @@ def test_the_real_loader_still_sees_every_platform(tmp_path):
     (vendors / "gpu.icd").write_text("libno-such-gpu-opencl.so\n")
     env = {k: v for k, v in os.environ.items() if k != "OCL_ICD_VENDORS"}
     env.update(OPENCL_VENDOR_PATH=str(vendors), CLSOLID_CACHE_DIR=str(tmp_path / "cache"))
-    code = ("import os, json, clsolid.core.device as d; names = [p.name for p in d._platforms()]; "
+    code = ("import os, json, clsolid.core.platforms as d; names = [p.name for p in d.platforms()]; "
             "print(json.dumps([names, os.environ.get('OCL_ICD_VENDORS')]))")
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     names, folder = json.loads(out.stdout.strip().splitlines()[-1])

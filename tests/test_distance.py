@@ -13,7 +13,8 @@ import clsolid
 from clsolid.errors import InputError
 from clsolid.gallery import gallery_exemplar
 from clsolid.ml import pruned
-from clsolid.ml.model import build_scale, difference, phase_costs, phase_sigma, scale_exemplar
+from clsolid.ml.model import build_scale, difference, phase_sigma, scale_exemplar
+from clsolid.phases import phase_costs
 from clsolid.ml.params import MLParams
 from clsolid.ml.reference import ReferenceBackend, site_distances
 

@@ -7,11 +7,11 @@ import pytest
 import clsolid
 from clsolid.cli import EXIT_USAGE, main
 from clsolid.errors import DeviceMemoryError, InputError
-from clsolid.exemplar import quantise
+from clsolid.exemplar import builtin_exemplar, quantise
 from clsolid.ml.driver import run_ml
 from clsolid.ml.opencl import CLBackend
 from clsolid.ml.params import MLParams
-from clsolid.ml.tiled import TiledBackend
+from clsolid.ml.tiled import LocalTiles, TiledBackend
 
 distributed = pytest.importorskip("distributed", reason='Dask is an optional extra: pip install "clsolid[dask]"')
 
@@ -42,7 +42,7 @@ def test_distributed_run_is_the_one_process_run(device, client, labels, likeliho
     """Gibbs with the balance (the defaults), exact and pruned: the sources go to the workers and back."""
     params = MLParams(neighborhood=5, scales=2, sweeps=2, likelihood=likelihood)
     whole = CLBackend(device)
-    local = TiledBackend(CLBackend(device), 8)
+    local = TiledBackend(LocalTiles(CLBackend(device)), 8)
     dask = TiledBackend(DaskTiles(client, device), 8)
     a = run_ml(labels, SHAPE, params, 5, whole)[0]
     b = run_ml(labels, SHAPE, params, 5, local)[0]
@@ -68,20 +68,21 @@ def test_the_workers_draw_the_random_start_a_run_at_a_time(device, client, monke
 
 
 def test_synthesize_with_a_client(device, client):
-    kw = dict(neighborhood=5, scales=2, rng=3, builtin_size=16, sweeps=1, device=device)
-    whole = clsolid.synthesize("gravel", SHAPE, **kw)
-    result = clsolid.synthesize("gravel", SHAPE, tile=9, client=client, full_output=True, **kw)
+    kw = dict(neighborhood=5, scales=2, rng=3, sweeps=1, device=device)
+    gravel = builtin_exemplar("gravel", size=16)
+    whole = clsolid.synthesize(gravel, SHAPE, **kw)
+    result = clsolid.synthesize(gravel, SHAPE, backend={"tile": 9, "client": client}, full_output=True, **kw)
     np.testing.assert_array_equal(result.volume, whole)
     assert result.device == device.name
 
 
 def test_client_options_are_checked(device, client):
     with pytest.raises(InputError, match=r"client= runs the tiles .* give tile=N too"):
-        clsolid.synthesize("gravel", SHAPE, client=client, device=device)
+        clsolid.synthesize("gravel", SHAPE, backend={"client": client}, device=device)
     with pytest.raises(InputError, match="tile=0 must be a positive integer"):
-        clsolid.synthesize("gravel", SHAPE, client=client, tile=0, device=device)
-    with pytest.raises(InputError, match="client=.* is for OpenCL devices"):
-        clsolid.synthesize("gravel", SHAPE, client=client, device="reference")
+        clsolid.synthesize("gravel", SHAPE, backend={"client": client, "tile": 0}, device=device)
+    with pytest.raises(InputError, match="is for OpenCL devices"):
+        clsolid.synthesize("gravel", SHAPE, backend={"client": client, "tile": 4}, device="reference")
     with pytest.raises(InputError, match="must be a device spec string"):
         device_spec(3)
 

@@ -9,11 +9,13 @@ import pytest
 import clsolid
 from clsolid.cli import EXIT_MEMORY, main
 from clsolid.core import scratch as scratch_module
-from clsolid.core.hostmemory import (BYTES_PER_EXEMPLAR_TERM, BYTES_PER_VOXEL, ENV, available_bytes, check_host_memory,
-                                     exemplar_terms, parse_bytes)
+from clsolid.core.hostmemory import ENV, available_bytes, check_host_memory, exemplar_terms, parse_bytes
+from clsolid.ml.backends import FOOTPRINT as ML, SCRATCH_FOOTPRINT as ML_SCRATCH
+from clsolid.search import FOOTPRINT as SEARCH
 from clsolid.errors import HostMemoryError, InputError
 from clsolid.gallery import gallery_exemplar
-from clsolid.ml import balance as ml_balance, driver as ml_driver
+from clsolid import balance as ml_balance
+from clsolid.ml import driver as ml_driver
 
 
 @pytest.mark.parametrize("text, want", [("1024", 1024), ("64G", 64 * 2**30), ("1.5M", int(1.5 * 2**20)),
@@ -36,37 +38,37 @@ def test_the_system_figure_is_known_here(monkeypatch):
 
 def test_a_block_over_the_available_memory_is_refused_with_what_to_do(monkeypatch):
     side = 128
-    monkeypatch.setenv(ENV, str(side**3 * BYTES_PER_VOXEL["ml"]))
-    check_host_memory((side, side, side), "ml")  # fits exactly
+    monkeypatch.setenv(ENV, str(side**3 * ML.per_voxel))
+    check_host_memory((side, side, side), ML)  # fits exactly
     with pytest.raises(HostMemoryError) as info:
-        check_host_memory((side, side, side + 1), "ml")
+        check_host_memory((side, side, side + 1), ML)
     msg = str(info.value)
     assert f"{side}x{side}x{side + 1}" in msg and "GiB" in msg and "smaller block" in msg and ENV in msg
     assert isinstance(info.value, MemoryError) and "--scratch DIR" in msg  # the likelihood's way out
     again = pickle.loads(pickle.dumps(info.value))  # it crosses processes (Dask) whole
     assert str(again) == msg
     with pytest.raises(HostMemoryError):  # the search methods keep more a voxel
-        check_host_memory((side, side, side), "search")
-    assert BYTES_PER_VOXEL["search"] > BYTES_PER_VOXEL["ml"]
+        check_host_memory((side, side, side), SEARCH)
+    assert SEARCH.per_voxel > ML.per_voxel
 
 
 def test_the_exemplar_windows_are_counted(monkeypatch):
     assert exemplar_terms((64, 80), 11) == 54 * 70 * 120
     assert exemplar_terms((9, 9), 11) == 0
     terms = exemplar_terms((1024, 1024), 11)
-    exemplar = terms * BYTES_PER_EXEMPLAR_TERM
+    exemplar = terms * ML.per_exemplar_term
     assert 6.2e9 < exemplar < 8e9  # a 1024^2 exemplar peaked at 6.19 GB, whatever the block
-    monkeypatch.setenv(ENV, str(16**3 * BYTES_PER_VOXEL["ml"] + exemplar))
-    check_host_memory((16, 16, 16), "ml", terms)  # fits exactly
+    monkeypatch.setenv(ENV, str(16**3 * ML.per_voxel + exemplar))
+    check_host_memory((16, 16, 16), ML, terms)  # fits exactly
     with pytest.raises(HostMemoryError, match="exemplar's windows") as info:
-        check_host_memory((16, 16, 17), "ml", terms)
+        check_host_memory((16, 16, 17), ML, terms)
     assert info.value.exemplar == exemplar
     assert str(pickle.loads(pickle.dumps(info.value))) == str(info.value)
 
 
 def test_synthesize_refuses_a_large_exemplar_for_a_small_block(monkeypatch):
     """24^3 alone fits, with a 128^2 exemplar's windows it does not: refused before anything is built."""
-    monkeypatch.setenv(ENV, str(24**3 * BYTES_PER_VOXEL["ml"] + 2**20))
+    monkeypatch.setenv(ENV, str(24**3 * ML.per_voxel + 2**20))
     with pytest.raises(HostMemoryError, match="exemplar's windows"):
         clsolid.synthesize(gallery_exemplar("porous50", 128), (24, 24, 24), device="reference", rng=1)
 
@@ -89,7 +91,10 @@ def _traced_peak(side: int, device, options: dict) -> int:
     """Peak of the host allocations NumPy and Python trace (device buffers excluded)."""
     tracemalloc.start()
     try:
-        clsolid.synthesize(gallery_exemplar("composite3", 64), (side,) * 3, rng=1, device=device, **options)
+        backend = {k: options[k] for k in ("tile", "scratch") if k in options}
+        method = {k: v for k, v in options.items() if k not in backend}
+        clsolid.synthesize(gallery_exemplar("composite3", 64), (side,) * 3, rng=1, device=device,
+                           backend=backend or None, **method)
         return tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
@@ -98,7 +103,7 @@ def _traced_peak(side: int, device, options: dict) -> int:
 @pytest.mark.parametrize("options, most", [
     ({"likelihood": "exact", "sweeps": 1}, 28),
     ({"likelihood": "exact", "sweeps": 1, "tile": 20}, 30),
-    ({"likelihood": "pruned", "sweeps": 1, "tile": 20, "scratch": "a folder"}, BYTES_PER_VOXEL["ml-scratch"] - 2),
+    ({"likelihood": "pruned", "sweeps": 1, "tile": 20, "scratch": "a folder"}, ML_SCRATCH.per_voxel - 2),
     ({"method": "kopf", "search": "coherence", "iterations": 1}, 40),
 ])
 def test_the_drivers_hold_few_bytes_a_voxel(device, options, most, tmp_path, monkeypatch):

@@ -5,6 +5,7 @@ import sys
 import zipfile
 from pathlib import Path
 
+import clsolid
 from clsolid.core import programs
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -23,4 +24,8 @@ def test_wheel_contains_the_kernels(tmp_path):
     assert {"clsolid/kernels/ml/likelihood.cl", "clsolid/kernels/core/init.cl",
             "clsolid/kernels/search/match.cl", "clsolid/kernels/search/gather.cl", "clsolid/search/match.py",
             "clsolid/search/block.py"} <= set(names)
-    assert "clsolid/cli.py" in names
+    packages = {str(d.relative_to(ROOT)) for d in (ROOT / "clsolid").rglob("__init__.py")}
+    assert packages <= set(names)  # every package listed in pyproject.toml
+    assert {f"clsolid/presets/{p.name}" for p in (ROOT / "clsolid" / "presets").glob("*.toml")} <= set(names)
+    version = next(n for n in names if n.endswith(".dist-info/METADATA"))
+    assert f"Version: {clsolid.__version__}" in zipfile.ZipFile(wheel).read(version).decode()

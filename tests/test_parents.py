@@ -123,8 +123,9 @@ def test_runs_with_parent_terms_are_reproducible_and_tiles_change_nothing(tmp_pa
     kw = dict(neighborhood=5, scales=2, parent_weight=4.0, parent_min_side=0, rng=3, device=device, output="labels")
     a = clsolid.synthesize(small_labels, (12, 12, 12), **kw)
     np.testing.assert_array_equal(a, clsolid.synthesize(small_labels, (12, 12, 12), **kw))
-    np.testing.assert_array_equal(a, clsolid.synthesize(small_labels, (12, 12, 12), tile=8, **kw))
-    np.testing.assert_array_equal(a, clsolid.synthesize(small_labels, (12, 12, 12), tile=8, scratch=tmp_path, **kw))
+    np.testing.assert_array_equal(a, clsolid.synthesize(small_labels, (12, 12, 12), backend={"tile": 8}, **kw))
+    np.testing.assert_array_equal(a, clsolid.synthesize(small_labels, (12, 12, 12), backend={"tile": 8, "scratch": tmp_path},
+                                                             **kw))
     plain = clsolid.synthesize(small_labels, (12, 12, 12), **{**kw, "parent_weight": 0})
     assert (a != plain).mean() > 0.1
 

@@ -4,7 +4,9 @@ import json
 
 import pytest
 
-from clsolid.cli import SYNTH_DEFAULTS, _parse, _preset_defaults, build_parser, main
+from clsolid.cli import build_parser, main
+from clsolid.cli.synth import SOURCES, resolve
+from clsolid.core.options import names
 from clsolid.errors import InputError
 from clsolid.ml.params import MLParams
 from clsolid.presets import PRESETS, get_preset
@@ -25,7 +27,7 @@ def test_every_thesis_experiment_has_a_valid_preset():
     assert set(PRESETS) == THESIS_NAMES
     for preset in PRESETS.values():
         params = _params(preset)  # validates every option
-        assert preset.source.startswith("thesis §") and preset.departures
+        assert preset.source.startswith("Urs thesis, §") and preset.departures and preset.path.is_file()
         assert preset.keywords()["shape"] == preset.shape and preset.keywords()["method"] == preset.method
         assert params.neighborhood == preset.options["neighborhood"]
 
@@ -49,32 +51,41 @@ def test_unknown_preset_is_refused():
         build_parser().parse_args(["synth", "-o", "x.npy", "--preset", "ch9"])
 
 
+def _settings(argv):
+    args = vars(build_parser().parse_args(["synth", *argv]))
+    args.pop("command")
+    return resolve(args)
+
+
 def test_every_preset_option_is_a_synth_flag():
+    flags = {name for _, cls in SOURCES for name in names(cls)}
     for preset in PRESETS.values():
-        assert set(_preset_defaults(preset)) <= set(SYNTH_DEFAULTS), preset.name
+        assert set(preset.options) | {"method", "shape", "builtin_size"} <= flags, preset.name
 
 
 def test_preset_becomes_the_defaults_and_explicit_flags_win():
-    args = _parse(build_parser(), ["synth", "-o", "x.npy", "--preset", "ch5_compare", "--neighborhood", "5"])
-    assert args.neighborhood == 5  # given: wins
-    assert (args.relaxation, args.balance, args.upsampling, args.bandwidth_factor) == ("icm", 0.0, "1/8", [1.0])
-    assert tuple(args.shape) == (64, 64, 64)
-    plain = _parse(build_parser(), ["synth", "-o", "x.npy"])
-    assert plain.relaxation == MLParams().relaxation and plain.preset is None  # no leak between parsers
+    run = _settings(["-o", "x.npy", "--preset", "ch5_compare", "--neighborhood", "5"])
+    options = run.method_options
+    assert options["neighborhood"] == 5  # given: wins
+    assert (options["relaxation"], options["balance"], options["upsampling"], options["bandwidth_factor"]) == (
+        "icm", 0.0, "1/8", 1.0)
+    assert tuple(run.command.shape) == (64, 64, 64)
+    plain = _settings(["-o", "x.npy"])
+    assert "relaxation" not in plain.method_options and plain.command.preset is None  # no leak between runs
 
 
-def test_preset_for_another_method_is_refused(capsys):
-    with pytest.raises(SystemExit):
-        _parse(build_parser(), ["synth", "-o", "x.npy", "--preset", "ch5_np_common", "--method", "ml"])
-    assert "is for --method wl, kopf, chen-wang" in capsys.readouterr().err
-    with pytest.raises(SystemExit):
-        _parse(build_parser(), ["synth", "-o", "x.npy", "--preset", "ch5_compare", "--method", "kopf"])
-    assert "is for --method ml" in capsys.readouterr().err
+def test_preset_for_another_method_is_refused():
+    with pytest.raises(InputError, match="is for --method wl, kopf, chen-wang"):
+        _settings(["-o", "x.npy", "--preset", "ch5_np_common", "--method", "ml"])
+    with pytest.raises(InputError, match="is for --method ml"):
+        _settings(["-o", "x.npy", "--preset", "ch5_compare", "--method", "kopf"])
 
 
 def test_a_search_preset_serves_every_search_method():
-    args = _parse(build_parser(), ["synth", "-o", "x.npy", "--preset", "ch5_np_common", "--method", "chen-wang"])
-    assert (args.method, args.neighborhood, args.iterations, args.levels) == ("chen-wang", 7, 10, 32)
+    run = _settings(["-o", "x.npy", "--preset", "ch5_np_common", "--method", "chen-wang"])
+    options = run.method_options
+    assert (run.command.method, options["neighborhood"], options["iterations"], options["levels"]) == (
+        "chen-wang", 7, 10, 32)
 
 
 def test_preset_runs_and_is_recorded(tmp_path, device):

@@ -267,7 +267,7 @@ def test_pruned_run_resumes_identically(tmp_path, device, name):
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        clsolid.synthesize(ex, (16, 16, 16), checkpoint=tmp_path / "ck", progress=stop, **kw)
+        clsolid.synthesize(ex, (16, 16, 16), backend={"checkpoint": tmp_path / "ck"}, progress=stop, **kw)
     resumed = clsolid.resume(tmp_path / "ck", device=device, full_output=True)
     np.testing.assert_array_equal(resumed.volume, whole.volume)
 
@@ -449,7 +449,7 @@ def test_projected_candidates_run_is_reproducible_and_tiles_alike(device):
               device=device.device.name.strip()[:8])
     one = clsolid.synthesize(ex, (12, 12, 12), **kw)
     assert np.array_equal(one, clsolid.synthesize(ex, (12, 12, 12), **kw))
-    assert np.array_equal(one, clsolid.synthesize(ex, (12, 12, 12), tile=7, **kw))
+    assert np.array_equal(one, clsolid.synthesize(ex, (12, 12, 12), backend={"tile": 7}, **kw))
     assert not np.array_equal(one, clsolid.synthesize(ex, (12, 12, 12), **{**kw, "prune_projected": 0}))
 
 

@@ -8,7 +8,7 @@ import pytest
 from conftest import random_state
 
 from clsolid import InputError
-from clsolid.ml.balance import score_stride
+from clsolid.balance import score_stride
 from clsolid.ml.opencl import CLBackend
 from clsolid.ml.model import build_scale
 from clsolid.ml.params import MLParams

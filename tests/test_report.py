@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 
@@ -13,17 +12,17 @@ from PIL import Image
 from scipy import ndimage as ndi
 
 from clsolid.errors import InputError
-from clsolid.report import (EXIT_INPUT, EXIT_NO_MATPLOTLIB, EXIT_OK, add_evaluate_arguments, format_table,
-                            format_track, load_exemplar, load_volume, main_evaluate, plot_report, plot_track,
+from clsolid.cli import EXIT_MISSING, EXIT_OK, EXIT_USAGE, main
+from clsolid.report import (format_table, format_track, load_exemplar, load_volume, plot_report, plot_track,
                             validate_track)
+
+EXIT_INPUT, EXIT_NO_MATPLOTLIB = EXIT_USAGE, EXIT_MISSING
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
 def run(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(prog="clsolid evaluate")
-    add_evaluate_arguments(parser)
-    return main_evaluate(parser.parse_args([str(a) for a in argv]))
+    return main(["evaluate", *(str(a) for a in argv)])
 
 
 @pytest.fixture(scope="module")
@@ -121,7 +120,7 @@ def test_singleton_axes_are_dropped(tmp_path):
     assert load_volume(tmp_path / "v.npy").shape == (8, 9, 10)
 
 
-def test_plot_without_matplotlib_exits_3(files, capsys, no_matplotlib, tmp_path):
+def test_plot_without_matplotlib_is_a_missing_dependency(files, capsys, no_matplotlib, tmp_path):
     rc = run([files / "ex.npy", files / "vol.tif", "--plot", tmp_path / "r.png"])
     err = capsys.readouterr().err
     assert rc == EXIT_NO_MATPLOTLIB

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import clsolid
+from clsolid.phases import is_categorical
 from clsolid.gallery import gallery_exemplar
 from clsolid.core.schedule import colour_sets
 from clsolid.search.coherence import SIMILAR, Coherence, phase_nearest
@@ -209,7 +210,7 @@ def test_exact_passes_need_the_coherence_search():
 
 def test_one_exact_pass_is_kopfs_default_on_grey_exemplars_only():
     def resolved(n_values=256, **kw):
-        return SearchParams(**kw).for_exemplar(n_values).exact_passes
+        return SearchParams(**kw).for_exemplar(n_values, is_categorical(n_values)).exact_passes
 
     assert SearchParams(method="kopf").exact_passes is None  # until the exemplar is known
     assert resolved(method="kopf") == 1 and resolved(9, method="kopf") == 1  # grey: hrtem's patches (docs/gallery.md)
@@ -390,7 +391,7 @@ def test_a_minority_phase_survives_the_coherence_search(device):
 
 def test_the_index_histogram_defaults_where_it_was_measured_better_and_is_checked():
     def resolved(n_values=256, **kw):
-        return SearchParams(**kw).for_exemplar(n_values).index_histogram
+        return SearchParams(**kw).for_exemplar(n_values, is_categorical(n_values)).index_histogram
 
     assert SearchParams(method="kopf", search="coherence").index_histogram is None  # until the exemplar is known
     assert resolved(method="kopf", search="coherence") is True  # measured on the gallery's grey exemplars

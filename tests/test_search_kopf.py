@@ -78,7 +78,8 @@ def test_kopf_keeps_the_minority_phase_better_than_wl(device):
 def _slow_support(level, vol, coarse):
     """overlap_support by explicit loops: every voxel, view and offset, one proposal at a time."""
     from clsolid.core.views import VIEW_AXES
-    from clsolid.search.kopf import MAX_PHASES, histogram_factor, robust_weights
+    from clsolid.phases import MAX_PHASES
+    from clsolid.search.kopf import histogram_factor, robust_weights
     from clsolid.search.match import square_offsets
     from clsolid.search.wl import matches
 
@@ -119,7 +120,8 @@ def test_overlap_support_matches_explicit_loops(name):
     level = Level(params=params, matcher=ReferenceMatcher(table), centres=centres,
                   patches=table[:, : k * k].astype(np.float64), values=np.unique(ex),
                   w_first=centre_weights(k, False, centre=False), w_again=centre_weights(k, False, centre=True),
-                  span=float(ex.max() - ex.min()), histogram=LevelHistogram(ex, ex, vol))
+                  span=float(ex.max() - ex.min()), categorical=name == "composite3",
+                  histogram=LevelHistogram(ex, ex, vol))
     phases, num, den, searches = overlap_support(level, vol, None)
     slow = _slow_support(level, vol, None)
     assert searches == 2 * vol.size and (phases is None) == (name == "gravel")
@@ -412,12 +414,14 @@ def test_the_parent_weight_scales_the_parent_terms_as_a_weight_would(device):
 
 def test_distance_resolves_per_exemplar_and_is_checked():
     assert SearchParams(method="kopf").distance == "auto"
-    assert [SearchParams(method="kopf").for_exemplar(n).distance for n in (2, 3, 8, 9, 256)] == \
+    kopf = SearchParams(method="kopf")
+    assert [kopf.for_exemplar(n, n <= 8).distance for n in (2, 3, 8, 9, 256)] == \
         ["squared", "weighted", "weighted", "squared", "squared"]
-    assert SearchParams(method="kopf", distance="squared").for_exemplar(4).distance == "squared"
-    assert SearchParams(method="wl").for_exemplar(4).distance == SearchParams(method="chen-wang").for_exemplar(
-        4).distance == "squared"
-    assert SearchParams(method="wl", distance="weighted").for_exemplar(4).distance == "weighted"
+    assert kopf.for_exemplar(4, False).distance == "squared"  # 4 grey levels of a quantised image: not phases
+    assert SearchParams(method="kopf", distance="squared").for_exemplar(4, True).distance == "squared"
+    assert SearchParams(method="wl").for_exemplar(4, True).distance == SearchParams(method="chen-wang").for_exemplar(
+        4, True).distance == "squared"
+    assert SearchParams(method="wl", distance="weighted").for_exemplar(4, True).distance == "weighted"
     with pytest.raises(clsolid.InputError, match="distance"):
         SearchParams(method="kopf", distance="mismatch")
 

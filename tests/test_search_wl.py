@@ -158,7 +158,8 @@ def test_wl_with_specify_keeps_the_exemplars_values_and_dtype(device):
 
 
 @pytest.mark.parametrize("kwargs, word", [
-    (dict(output="labels"), "no level indices"), (dict(xi=-2.0), "unknown option"),
+    (dict(output="labels"), "no level indices"), (dict(xi=-2.0), "an option of method 'ml', not of 'wl'"),
+    (dict(relaxaton="icm"), "unknown option"), (dict(iteratons=3), "did you mean 'iterations'"),
     (dict(neighborhood=8), "odd"), (dict(iterations=0), "iterations"), (dict(heuristic="h2-min"), "heuristic"),
 ])
 def test_synthesize_refuses_what_wl_cannot_do(kwargs, word):

@@ -8,20 +8,23 @@ import pytest
 
 import clsolid
 from clsolid.cli import EXIT_USAGE, main
-from clsolid.core.hostmemory import (BYTES_PER_EXEMPLAR_TERM, ENV, SCRATCH_BYTES_PER_VOXEL, check_scratch_space,
-                                     exemplar_terms)
+from clsolid.core.hostmemory import ENV, SCRATCH_BYTES_PER_VOXEL, check_scratch_space, exemplar_terms
 from clsolid import api as api_module
 from clsolid.core import checkpoint as checkpoint_module, scratch as scratch_module
 from clsolid.core.scratch import Scratch
 from clsolid.core.tiles import Tiling, gather, split_axis
 from clsolid.errors import DeviceMemoryError, HostMemoryError, InputError
-from clsolid.exemplar import quantise
+from clsolid.exemplar import builtin_exemplar, quantise
 from clsolid.ml import tiled
+from clsolid.ml.backends import FOOTPRINT
 from clsolid.ml.driver import run_ml
 from clsolid.ml.model import build_scale
 from clsolid.ml.opencl import CLBackend
 from clsolid.ml.params import MLParams
-from clsolid.ml.tiled import TiledBackend, check_tile, halo_width, largest_tile
+from clsolid.ml.tiled import LocalTiles, TiledBackend, check_tile, halo_width, largest_tile
+
+#: gravel at 16^2, for whole runs small enough to repeat.
+GRAVEL16 = builtin_exemplar("gravel", size=16)
 
 SHAPE = (20, 16, 18)  # no two axes alike; tiles of 8: 7, 7, 6 by 8, 8 by 6, 6, 6
 
@@ -112,7 +115,7 @@ def _params(case):
 def test_tiled_run_is_the_one_piece_run(device, labels, case):
     params = _params(case)
     whole = CLBackend(device)
-    tiles = TiledBackend(CLBackend(device), case["tile"])
+    tiles = TiledBackend(LocalTiles(CLBackend(device)), case["tile"])
     a = run_ml(labels, SHAPE, params, 7, whole)[0]
     b = run_ml(labels, SHAPE, params, 7, tiles)[0]
     assert len(tiles.tiling.tiles) > 1
@@ -126,7 +129,7 @@ def test_a_halo_too_narrow_changes_the_volume(device, labels, monkeypatch):
     a = run_ml(labels, SHAPE, params, 7, CLBackend(device))[0]
     narrow = halo_width
     monkeypatch.setattr(tiled, "halo_width", lambda model: narrow(model) - 1)
-    b = run_ml(labels, SHAPE, params, 7, TiledBackend(CLBackend(device), 8))[0]
+    b = run_ml(labels, SHAPE, params, 7, TiledBackend(LocalTiles(CLBackend(device)), 8))[0]
     assert (a != b).mean() > 0.05
 
 
@@ -156,14 +159,14 @@ def test_memory_is_checked_per_tile(device, monkeypatch):
     with pytest.raises(DeviceMemoryError, match=f"tile={edge + 1} the device holds"):
         check_tile(engine, models, edge + 1, params)
     with pytest.raises(DeviceMemoryError, match="with tile=64 the device holds .* use a smaller tile"):
-        clsolid.synthesize(binary, (64, 64, 64), tile=64, **kw)
+        clsolid.synthesize(binary, (64, 64, 64), backend={"tile": 64}, **kw)
 
 
 def test_tile_option_is_checked(device):
     with pytest.raises(InputError, match="tile=0 must be a positive integer"):
-        clsolid.synthesize("gravel", (8, 8, 8), tile=0, device=device)
+        clsolid.synthesize("gravel", (8, 8, 8), backend={"tile": 0}, device=device)
     with pytest.raises(InputError, match="tile=4 is for OpenCL devices"):
-        clsolid.synthesize("gravel", (8, 8, 8), tile=4, device="reference")
+        clsolid.synthesize("gravel", (8, 8, 8), backend={"tile": 4}, device="reference")
 
 
 def test_cli_tile_flag(tmp_path, device):
@@ -178,8 +181,8 @@ def test_cli_tile_flag(tmp_path, device):
 
 def test_tiled_checkpoint_resumes_identically(tmp_path, device, monkeypatch):
     """A tiled run's checkpoint holds the whole arrays: it resumes, tiled, to the one-piece volume."""
-    kw = dict(neighborhood=5, scales=2, rng=4, builtin_size=16, sweeps=3, likelihood="pruned", device=device)
-    whole = clsolid.synthesize("gravel", (12, 10, 14), **kw)
+    kw = dict(neighborhood=5, scales=2, rng=4, sweeps=3, likelihood="pruned", device=device)
+    whole = clsolid.synthesize(GRAVEL16, (12, 10, 14), **kw)
     seen = []
 
     class Stop(Exception):
@@ -192,14 +195,15 @@ def test_tiled_checkpoint_resumes_identically(tmp_path, device, monkeypatch):
 
     (tmp_path / "scratch").mkdir()  # the state on disk, checkpointed from there
     with pytest.raises(Stop):
-        clsolid.synthesize("gravel", (12, 10, 14), tile=5, checkpoint=tmp_path / "run", progress=stop,
-                           scratch=tmp_path / "scratch", **kw)
+        clsolid.synthesize(GRAVEL16, (12, 10, 14), progress=stop, backend={"tile": 5, "checkpoint": tmp_path / "run",
+                           "scratch": tmp_path / "scratch"}, **kw)
     assert list((tmp_path / "scratch").iterdir()) == []  # removed on the way out
     read = []  # the checkpoint's arrays go to the scratch folder as they are read (a small block: all of them)
     monkeypatch.setattr(api_module, "_SCRATCH_LEAST", 0)
     monkeypatch.setattr(checkpoint_module, "_read_member",
                         lambda *a, real=checkpoint_module._read_member: read.append(real(*a)) or read[-1])
-    np.testing.assert_array_equal(clsolid.resume(tmp_path / "run", device=device, tile=6, scratch=tmp_path / "scratch"),
+    np.testing.assert_array_equal(clsolid.resume(tmp_path / "run", device=device,
+                                                 backend={"tile": 6, "scratch": tmp_path / "scratch"}),
                                   whole)
     assert read and all(isinstance(a, np.memmap) for a in read)
     assert list((tmp_path / "scratch").iterdir()) == []
@@ -210,14 +214,14 @@ def test_region_order_is_a_visiting_order_the_tiles_keep(device, tmp_path, monke
     another volume than the set-by-set sweep, but the same one in tiles (of any edge), on disk,
     and resumed from a checkpoint. With tiles of the regions' edge a tile's state stays on the
     device from one set to the next: it is sent once a region and sweep, not once a set."""
-    kw = dict(neighborhood=5, scales=2, rng=4, builtin_size=16, sweeps=2, device=device, region=6)
-    one = clsolid.synthesize("gravel", (12, 10, 14), **kw)
-    assert not np.array_equal(one, clsolid.synthesize("gravel", (12, 10, 14), **{**kw, "region": 0}))
+    kw = dict(neighborhood=5, scales=2, rng=4, sweeps=2, device=device, region=6)
+    one = clsolid.synthesize(GRAVEL16, (12, 10, 14), **kw)
+    assert not np.array_equal(one, clsolid.synthesize(GRAVEL16, (12, 10, 14), **{**kw, "region": 0}))
     loads, real = [], CLBackend.load_state
     monkeypatch.setattr(CLBackend, "load_state", lambda self, *a, **k: loads.append(1) or real(self, *a, **k))
-    np.testing.assert_array_equal(clsolid.synthesize("gravel", (12, 10, 14), tile=6, **kw), one)
+    np.testing.assert_array_equal(clsolid.synthesize(GRAVEL16, (12, 10, 14), backend={"tile": 6}, **kw), one)
     held, loads[:] = len(loads), []
-    np.testing.assert_array_equal(clsolid.synthesize("gravel", (12, 10, 14), tile=5, scratch=tmp_path, **kw), one)
+    np.testing.assert_array_equal(clsolid.synthesize(GRAVEL16, (12, 10, 14), backend={"tile": 5, "scratch": tmp_path}, **kw), one)
     assert held * 4 < len(loads)  # tiles of 5 cut the regions of 6: sent again for every set
 
     class Stop(Exception):
@@ -228,7 +232,7 @@ def test_region_order_is_a_visiting_order_the_tiles_keep(device, tmp_path, monke
             raise Stop
 
     with pytest.raises(Stop):
-        clsolid.synthesize("gravel", (12, 10, 14), tile=6, checkpoint=tmp_path / "run", progress=stop, **kw)
+        clsolid.synthesize(GRAVEL16, (12, 10, 14), progress=stop, backend={"tile": 6, "checkpoint": tmp_path / "run"}, **kw)
     np.testing.assert_array_equal(clsolid.resume(tmp_path / "run", device=device), one)
 
 
@@ -242,7 +246,7 @@ def test_state_on_disk_gives_the_same_volume(device, labels, case, tmp_path):
     params = _params(case)
     a = run_ml(labels, SHAPE, params, 7, CLBackend(device))[0]
     with Scratch(tmp_path) as scratch:
-        tiles = TiledBackend(CLBackend(device), case["tile"], scratch)
+        tiles = TiledBackend(LocalTiles(CLBackend(device)), case["tile"], scratch)
         b = run_ml(labels, SHAPE, params, 7, tiles)[0]
         assert isinstance(tiles.volume(), np.memmap) and isinstance(tiles.temperature(), np.memmap)
         assert isinstance(tiles._src, np.memmap) and os.path.dirname(tiles.volume().filename) == scratch.folder
@@ -254,18 +258,18 @@ def test_state_on_disk_gives_the_same_volume(device, labels, case, tmp_path):
 
 
 def test_scratch_through_the_api_and_the_cli(device, tmp_path):
-    kw = dict(neighborhood=5, scales=2, rng=4, builtin_size=16, sweeps=2, device=device)
-    whole = clsolid.synthesize("gravel", (12, 10, 14), **kw)
-    on_disk = clsolid.synthesize("gravel", (12, 10, 14), tile=5, scratch=tmp_path, full_output=True, **kw)
+    kw = dict(neighborhood=5, scales=2, rng=4, sweeps=2, device=device)
+    whole = clsolid.synthesize(GRAVEL16, (12, 10, 14), **kw)
+    on_disk = clsolid.synthesize(GRAVEL16, (12, 10, 14), backend={"tile": 5, "scratch": tmp_path}, full_output=True, **kw)
     assert isinstance(on_disk.volume, np.memmap) and isinstance(on_disk.labels, np.memmap)  # the result there too
     np.testing.assert_array_equal(on_disk.volume, whole)
     assert os.listdir(tmp_path) == []  # its folder removed, the result's files nameless
     with pytest.raises(InputError, match="give tile=N too"):
-        clsolid.synthesize("gravel", (12, 10, 14), scratch=tmp_path, **kw)
+        clsolid.synthesize(GRAVEL16, (12, 10, 14), backend={"scratch": tmp_path}, **kw)
     with pytest.raises(InputError, match="does not exist"):
-        clsolid.synthesize("gravel", (12, 10, 14), tile=5, scratch=tmp_path / "nowhere", **kw)
+        clsolid.synthesize(GRAVEL16, (12, 10, 14), backend={"tile": 5, "scratch": tmp_path / "nowhere"}, **kw)
     with pytest.raises(InputError, match="is for OpenCL devices"):
-        clsolid.synthesize("gravel", (12, 10, 14), tile=5, scratch=tmp_path, **{**kw, "device": "reference"})
+        clsolid.synthesize(GRAVEL16, (12, 10, 14), backend={"tile": 5, "scratch": tmp_path}, **{**kw, "device": "reference"})
     args = ["--shape", "12", "10", "14", "--neighborhood", "5", "--scales", "2", "--seed", "4", "--builtin-size",
             "16", "--sweeps", "2", "-q"]
     out = tmp_path / "out"
@@ -283,7 +287,7 @@ def test_scratch_space_is_checked_first(device, tmp_path, monkeypatch):
     usage = shutil.disk_usage(tmp_path)
     monkeypatch.setattr(shutil, "disk_usage", lambda path: usage._replace(free=64**3 * SCRATCH_BYTES_PER_VOXEL - 1))
     with pytest.raises(InputError, match=r"64x64x64 block keeps about .* GiB free; free space there"):
-        clsolid.synthesize("gravel", (64, 64, 64), tile=16, scratch=tmp_path, device=device)
+        clsolid.synthesize("gravel", (64, 64, 64), backend={"tile": 16, "scratch": tmp_path}, device=device)
     assert list(tmp_path.iterdir()) == []  # refused before anything was allocated: no folder left
     check_scratch_space((63, 64, 64), str(tmp_path))  # fits
 
@@ -309,10 +313,10 @@ def test_scratch_arrays(tmp_path, monkeypatch):
 
 
 def test_the_host_check_counts_what_stays_in_memory(device, tmp_path, monkeypatch):
-    kw = dict(neighborhood=5, scales=2, rng=4, builtin_size=16, sweeps=1, device=device, tile=5)
+    kw = dict(neighborhood=5, scales=2, rng=4, sweeps=1, device=device)
     shape = (12, 10, 14)
-    exemplar = exemplar_terms((16, 16), 5) * BYTES_PER_EXEMPLAR_TERM
+    exemplar = exemplar_terms((16, 16), 5) * FOOTPRINT.per_exemplar_term
     monkeypatch.setenv(ENV, str(exemplar + int(np.prod(shape)) * 20))  # 20 bytes a voxel
     with pytest.raises(HostMemoryError, match="--scratch DIR"):
-        clsolid.synthesize("gravel", shape, **kw)
-    assert clsolid.synthesize("gravel", shape, scratch=tmp_path, **kw).shape == shape  # 4 in memory
+        clsolid.synthesize(GRAVEL16, shape, backend={"tile": 5}, **kw)
+    assert clsolid.synthesize(GRAVEL16, shape, backend={"tile": 5, "scratch": tmp_path}, **kw).shape == shape  # 4 in memory

@@ -182,14 +182,15 @@ def test_gallery_counts_kopfs_own_targets(tool):
     gallery = tool("gallery")
     scores = {v: {key: None for key, _ in gallery.SCORES} for v in gallery.VIEWS}
     for v in gallery.VIEWS:
-        scores[v]["histogram_kl"] = 0.07  # within issue 10's 0.1, not issue 11's 0.05
+        scores[v]["histogram_kl"] = 0.07  # within the common 0.1, not kopf's stricter 0.05
     row = {"phase_error_pp": 1.5, "scores": scores, "mirror": 0.0, "mirror_chance": 0.0, "stretch": 1.0,
            "copy": {"fraction": 0.5}, "seconds": 1.0, "constrained": ["front", "right"]}
     other = dict(row, phase_error_pp=2.5)  # within 3 points, not 2
     counts = {label: count for label, count, _ in gallery.target_counts({"a": row, "b": other}, "kopf")}
-    assert counts["every phase within 3 pp"] == "2/2" and counts["every phase within 2 pp (issue 11, kopf)"] == "1/2"
-    assert counts["histogram <= 0.1"] == "2/2" and counts["histogram <= 0.05 (issue 11, kopf)"] == "0/2"
-    assert not any("issue 11" in label for label, _, _ in gallery.target_counts({"a": row}, "ml"))
+    stricter = "(kopf's stricter target)"
+    assert counts["every phase within 3 pp"] == "2/2" and counts[f"every phase within 2 pp {stricter}"] == "1/2"
+    assert counts["histogram <= 0.1"] == "2/2" and counts[f"histogram <= 0.05 {stricter}"] == "0/2"
+    assert not any(stricter in label for label, _, _ in gallery.target_counts({"a": row}, "ml"))
 
 
 def test_gallery_merges_runs_split_by_exemplar(tool, tmp_path, capsys):

@@ -8,7 +8,7 @@ reference. Timings only: nothing here asserts on speed.
 
     python tools/bench_ml.py                 # both cases, default device
     python tools/bench_ml.py --case a --device pocl --shape 64 64 64
-    python tools/bench_ml.py --voxels-per-item 8      # OpenCL tuning, as synthesize() takes it
+    python tools/bench_ml.py --voxels-per-item 8      # OpenCL tuning, as synthesize(backend=...) takes it
 
 Without tuning options it measures what synthesize() does by default.
 """
@@ -69,7 +69,8 @@ ICM = dict(relaxation="icm", balance=0.0, slice_layout="aligned", insert_slices=
 def run_case(device, labels, shape, k: int, seed: int, factor: float | None, tuning: dict,
              method: dict | None = None) -> dict:
     r = clsolid.synthesize(labels.astype(np.uint16), shape, neighborhood=k, levels=32, rng=seed,
-                           device=device, full_output=True, bandwidth_factor=factor, **tuning, **(method or {}))
+                           device=device, full_output=True, bandwidth_factor=factor, backend=tuning or None,
+                           **(method or {}))
     return r.timings
 
 

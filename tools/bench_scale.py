@@ -61,11 +61,12 @@ def run(image: np.ndarray, side: int, likelihood: str, budget: float, device, ti
             raise _Stop
 
     stopped, volume = False, None
-    options = {k: v for k, v in (("tile", tile), ("client", client), ("scratch", scratch if tile else None),
-                                 ("region", region or None)) if v is not None}
+    backend = {k: v for k, v in (("tile", tile), ("client", client), ("scratch", scratch if tile else None))
+               if v is not None}
+    options = {"region": region} if region else {}
     try:
         volume = clsolid.synthesize(image, (side,) * 3, rng=1, device=device, likelihood=likelihood,
-                                    progress=progress, **options)
+                                    progress=progress, backend=backend, **options)
     except _Stop:
         stopped = True
     finest = [s for s in sweeps if s["scale"] == s["n_scales"]]

@@ -8,18 +8,14 @@ from __future__ import annotations
 
 import os
 import warnings
-from dataclasses import dataclass, field
 from typing import Any
 
-from ..errors import DeviceSkippedWarning, KernelBuildError, NoDeviceError
-from .icd import ensure_vendors
+from ..errors import DeviceSkippedWarning, InputError, KernelBuildError, NoDeviceError
+from .platforms import INSTALL_HINT, Device, devices_of, platforms
 from .probe import probe
 
-INSTALL_HINT = (
-    "Install an OpenCL runtime: on a CPU-only x86-64 machine `pip install \"clsolid[cpu]\"` brings "
-    "PoCL and Intel's CPU runtime (which compiles on any x86-64 CPU, AMD's included); "
-    "on a GPU machine install the vendor's OpenCL driver"
-)
+__all__ = ["Device", "INSTALL_HINT", "select_device", "list_devices", "device_index", "type_name"]
+
 #: What to do about a CPU device whose compiler fails (e.g. PoCL's LLVM 14 on AMD Zen 5).
 CPU_FIX = (
     "install Intel's CPU OpenCL runtime, which compiles on any x86-64 CPU: "
@@ -27,66 +23,6 @@ CPU_FIX = (
     "then select it with --device intel (device=\"intel\")"
 )
 GPU_FIX = "update the device's OpenCL driver, or choose another device (`clsolid devices` lists them)"
-
-
-@dataclass
-class Device:
-    """A chosen OpenCL device with its context and in-order queue.
-
-    Attributes
-    ----------
-    device, context, queue
-        The ``pyopencl`` objects.
-    programs : dict
-        Program cache of this context, keyed by (source, options); see ``clsolid.core.programs``.
-    """
-
-    device: Any
-    context: Any
-    queue: Any
-    programs: dict = field(default_factory=dict, repr=False)
-
-    @property
-    def name(self) -> str:
-        return f"{self.device.platform.name.strip()} / {self.device.name.strip()}"
-
-    @property
-    def max_alloc(self) -> int:
-        return int(self.device.max_mem_alloc_size)
-
-    @property
-    def global_mem(self) -> int:
-        return int(self.device.global_mem_size)
-
-    @property
-    def is_cpu(self) -> bool:
-        import pyopencl as cl
-
-        return bool(self.device.type & cl.device_type.CPU)
-
-
-def _platforms():
-    ensure_vendors()  # before the first OpenCL call: makes a pip-installed Intel CPU runtime visible
-    try:
-        import pyopencl as cl
-    except ImportError as exc:  # pragma: no cover - pyopencl is a hard dependency
-        raise NoDeviceError(f"pyopencl cannot be imported ({exc}). {INSTALL_HINT}.") from exc
-    try:
-        platforms = cl.get_platforms()
-    except cl.Error as exc:
-        raise NoDeviceError(f"no OpenCL platform found ({exc}). {INSTALL_HINT}.") from exc
-    if not platforms:
-        raise NoDeviceError(f"no OpenCL platform found. {INSTALL_HINT}.")
-    return platforms
-
-
-def _devices_of(platform) -> list:
-    import pyopencl as cl
-
-    try:
-        return list(platform.get_devices())
-    except cl.Error:
-        return []
 
 
 def type_name(device_type: int) -> str:
@@ -125,8 +61,8 @@ def list_devices(*, probe_devices: bool = True) -> list[dict]:
         If no OpenCL platform is installed.
     """
     out = []
-    for ip, platform in enumerate(_platforms()):
-        for idev, dev in enumerate(_devices_of(platform)):
+    for ip, platform in enumerate(platforms()):
+        for idev, dev in enumerate(devices_of(platform)):
             entry = {
                 "index": f"{ip}:{idev}",
                 "platform": platform.name.strip(),
@@ -150,8 +86,8 @@ def list_devices(*, probe_devices: bool = True) -> list[dict]:
 def device_index(device: Device) -> str:
     """The ``"platform:device"`` index of *device* among this machine's OpenCL devices: a spec
     that another process on this machine (a Dask worker) opens as the same device."""
-    for ip, platform in enumerate(_platforms()):
-        for idev, dev in enumerate(_devices_of(platform)):
+    for ip, platform in enumerate(platforms()):
+        for idev, dev in enumerate(devices_of(platform)):
             if dev == device.device:
                 return f"{ip}:{idev}"
     raise NoDeviceError(f"{device.name} is not among this machine's OpenCL devices; give a device spec instead")
@@ -202,8 +138,8 @@ def _fix_for(dev) -> str:
 
 def _candidates(spec: str | None) -> tuple[list, bool]:
     """Devices matching *spec* (PYOPENCL_CTX syntax or a name), and whether one was named exactly."""
-    platforms = _platforms()
-    all_devices = [d for p in platforms for d in _devices_of(p)]
+    found = platforms()
+    all_devices = [d for p in found for d in devices_of(p)]
     if not all_devices:
         raise NoDeviceError(f"OpenCL platforms exist but expose no device. {INSTALL_HINT}.")
     if spec is None or not spec.strip():
@@ -211,13 +147,13 @@ def _candidates(spec: str | None) -> tuple[list, bool]:
     spec = spec.strip()
     if ":" in spec:
         ptok, dtok = spec.split(":", 1)
-        platform = _pick(platforms, ptok, "OpenCL platform", lambda p: p.name)
-        devices = _devices_of(platform)
+        platform = _pick(found, ptok, "OpenCL platform", lambda p: p.name)
+        devices = devices_of(platform)
         if not dtok.strip():
             return devices, False
         return [_pick(devices, dtok, f"device on platform {platform.name.strip()!r}", lambda d: d.name)], True
     if spec.isdigit():
-        return _devices_of(_pick(platforms, spec, "OpenCL platform", lambda p: p.name)), False
+        return devices_of(_pick(found, spec, "OpenCL platform", lambda p: p.name)), False
     low = spec.lower()
     if low in ("cpu", "gpu", "accelerator"):
         import pyopencl as cl
@@ -282,6 +218,9 @@ def select_device(spec: "str | Device | None" = None) -> Device:
     """
     if isinstance(spec, Device):
         return spec
+    if spec is not None and not isinstance(spec, str):
+        raise InputError(f"device={spec!r} must be a string (PYOPENCL_CTX syntax such as '0' or '0:1', a name, "
+                         "'cpu' or 'gpu'), a Device or None")
     import pyopencl as cl
 
     if spec is None:

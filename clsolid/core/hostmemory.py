@@ -9,35 +9,39 @@ killed by the system, often at the finest scale, hours in; it is refused at once
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import HostMemoryError, InputError
-from ..exemplar import window_grid
+from .geometry import window_grid
 
-#: Host bytes a voxel of the full-resolution block costs at a run's peak: the likelihood
-#: method, in one piece or in tiles (``"ml"``); a tiled likelihood run with its state, the
-#: result's arrays and the ``+in`` mask in a scratch folder (``"ml-scratch"``,
-#: :mod:`clsolid.core.scratch`: only buffers of bounded size stay in memory, a conflict-free
-#: set's indices, the views' scores of a tile; the files' pages count in the resident size
-#: too, but the system pages them out as it needs); the search methods (``"search"``, the
-#: most that ``chen-wang`` takes). Each is the growth of peak RSS with the block, measured
-#: where device buffers are host memory, with room kept above it (docs/design.md, "Host
-#: memory"). The drivers hold no whole-block index arrays (each conflict-free set is
-#: generated when it is relaxed, :func:`clsolid.core.schedule.colour_set`).
-BYTES_PER_VOXEL = {"ml": 48, "ml-scratch": 4, "search": 120}
+
+@dataclass(frozen=True)
+class Footprint:
+    """What a run keeps on the host, as each method declares it.
+
+    Attributes
+    ----------
+    per_voxel : int
+        Bytes a voxel of the full-resolution block costs at the run's peak: the growth of
+        peak RSS with the block, measured where device buffers are host memory, with room
+        kept above it (docs/design.md, "Host memory").
+    per_exemplar_term : int
+        Bytes each term of the exemplar's windows costs (:func:`exemplar_terms`); 0: not counted.
+    advice : str
+        What else the user can do when the block does not fit (a clause, ", ..." form).
+    """
+
+    per_voxel: int
+    per_exemplar_term: int = 0
+    advice: str = ""
+
+
 #: Disk bytes a voxel of a tiled likelihood run with a scratch folder takes there at its
 #: peak (:mod:`clsolid.core.scratch`): the random start (4) and the finest scale's start state
 #: (4 + 8) beside the back end's state (4 + 4 + 4 a view), and the coarser scales' 1/7 more.
 SCRATCH_BYTES_PER_VOXEL = 40
-
-#: Host bytes each term of the exemplar's windows costs the likelihood method (its sites at
-#: the finest scale times the window's terms, k^2 - 1): the windows of every scale in float64,
-#: their device copies, the distinct windows and their similar-window tables. Measured as
-#: the growth of peak RSS with the exemplar's side, with some room (docs/design.md, "Host
-#: memory"): a 1024^2 exemplar with 11 x 11 windows takes about 7 GB whatever the block.
-#: The search methods' is not measured.
-BYTES_PER_EXEMPLAR_TERM = 56
 
 #: Environment variable that overrides the memory thought available (bytes, or with a
 #: K, M, G or T suffix): where the system's figure is wrong for a run (swap, a cgroup).
@@ -76,18 +80,15 @@ def available_bytes() -> int | None:
         return None
 
 
-def check_host_memory(shape: tuple[int, int, int], kind: str, exemplar_terms: int = 0) -> None:
+def check_host_memory(shape: tuple[int, int, int], footprint: Footprint, exemplar_terms: int = 0) -> None:
     """Refuse (:class:`~clsolid.errors.HostMemoryError`) a *shape* block whose run would take
-    more host memory than is available (*kind*: ``"ml"``, ``"ml-scratch"``, a tiled run with its
-    state on disk, or ``"search"``), counting
-    *exemplar_terms* (:func:`exemplar_terms`) at :data:`BYTES_PER_EXEMPLAR_TERM` each."""
-    exemplar = int(exemplar_terms) * BYTES_PER_EXEMPLAR_TERM
-    need = int(np.prod(shape, dtype=np.int64)) * BYTES_PER_VOXEL[kind] + exemplar
+    more host memory than is available, by the method's *footprint*, counting *exemplar_terms*
+    (:func:`exemplar_terms`) at its bytes a term."""
+    exemplar = int(exemplar_terms) * footprint.per_exemplar_term
+    need = int(np.prod(shape, dtype=np.int64)) * footprint.per_voxel + exemplar
     have = available_bytes()
     if have is not None and need > have:
-        hint = (", keep a tiled run's state on disk (tile= and scratch=, --tile N --scratch DIR: about "
-                f"{BYTES_PER_VOXEL['ml-scratch']} bytes a voxel stay in memory)") if kind == "ml" else ""
-        raise HostMemoryError(shape, need, have, BYTES_PER_VOXEL[kind], exemplar, hint)
+        raise HostMemoryError(shape, need, have, footprint.per_voxel, exemplar, footprint.advice)
 
 
 def check_scratch_space(shape: tuple[int, int, int], folder: str) -> None:

@@ -2,17 +2,19 @@
 
 An OpenCL driver can list a device that cannot build our kernels. PoCL on LLVM 14 lists
 a Zen 5 CPU, then fails every build ("unknown target CPU 'generic'"); on a Zen 4 CPU it
-builds a tiny kernel but aborts the whole process on the 16-wide vectors of ``kernels/ml/likelihood.cl``
-("LLVM ERROR: Cannot emit physreg copy instruction"). So the probe builds a tiny kernel
-and runs it (checking its result), then runs a tiny synthesis at the widest vector
-width that works (16, 8, then 4), each attempt in a child process that an abort cannot
-take down. The answer, with that width, is cached on disk (``clsolid.core.icd.cache_dir()``)
-and keyed by platform, device, driver and OpenCL versions: a few seconds the first time,
-nothing afterwards.
+builds a tiny kernel but aborts the whole process on 16-wide vectors ("LLVM ERROR: Cannot
+emit physreg copy instruction"). So the probe builds a tiny kernel and runs it (checking its
+result), then runs every method's smoke test (:func:`register_smoke_test`: each builds and
+launches its kernels on a tiny case) at the widest vector width that works (16, 8, then 4),
+each attempt in a child process that an abort cannot take down. The answer, with that
+width, is cached on disk (``clsolid.core.icd.cache_dir()``) and keyed by platform, device,
+driver and OpenCL versions and the smoke tests: a few seconds the first time, nothing afterwards.
 """
 
 from __future__ import annotations
 
+import hashlib
+import importlib
 import json
 import logging
 import os
@@ -31,7 +33,7 @@ from .icd import cache_dir
 log = logging.getLogger(__name__)
 
 #: Bump when what the probe checks changes, so old cached answers are not reused.
-PROBE_VERSION = 3
+PROBE_VERSION = 4
 CACHE_FILE = "device-probes.json"
 #: Vector widths tried, widest (fastest where it compiles) first.
 VECTOR_WIDTHS = (16, 8, 4)
@@ -48,6 +50,21 @@ __kernel void probe(__global float *out, float a)
 }
 """
 _memo: dict[str, "ProbeResult"] = {}
+#: The smoke tests each probe runs after the tiny kernel, as ``"module:function"``; each is
+#: called with a :class:`~clsolid.core.device.Device` and a vector width, and raises on failure.
+SMOKE_TESTS: list[str] = []
+
+
+def register_smoke_test(target: str) -> None:
+    """Add a method's smoke test (``"package.module:function"``) to those every probe runs.
+
+    The function builds and launches the method's kernels on a tiny case at the vector
+    width it is given; the probe runs it in a child process, which imports it by name.
+    """
+    if ":" not in target:
+        raise ValueError(f"a smoke test is named 'module:function', not {target!r}")
+    if target not in SMOKE_TESTS:
+        SMOKE_TESTS.append(target)
 
 
 @dataclass(frozen=True)
@@ -65,7 +82,8 @@ class ProbeResult:
 def device_key(dev: Any) -> str:
     """Identity of a device and of the driver that compiles for it."""
     p = dev.platform
-    parts = (p.name, p.version, dev.name, dev.driver_version, dev.version, f"probe{PROBE_VERSION}")
+    tests = hashlib.sha256(" ".join(sorted(SMOKE_TESTS)).encode()).hexdigest()[:8]
+    parts = (p.name, p.version, dev.name, dev.driver_version, dev.version, f"probe{PROBE_VERSION}", tests)
     return " | ".join(str(s).strip() for s in parts)
 
 
@@ -91,23 +109,23 @@ def _build(ctx: Any, source: str, options: list[str]) -> Any:
         return cl.Program(ctx, source).build(options=options)
 
 
-def _tiny_synthesis(device: Any, vector_width: int) -> None:
-    """One sweep of a 4^3 block with the default 9x9 window and 32 levels: every kernel runs.
+def run_smoke_tests(device: Any, vector_width: int, targets: list[str] | None = None) -> None:
+    """Every registered smoke test (or *targets*) on *device* at *vector_width*.
 
-    Running matters: PoCL generates the machine code of a kernel at its first launch,
-    and that is where LLVM 14 aborts on a Zen 4 CPU.
+    Running matters, not only building: PoCL generates a kernel's machine code at its first
+    launch, and that is where LLVM 14 aborts on a Zen 4 CPU.
     """
-    from ..api import synthesize
+    for target in SMOKE_TESTS if targets is None else targets:
+        module, function = target.split(":")
+        getattr(importlib.import_module(module), function)(device, vector_width)
 
-    exemplar = np.random.default_rng(0).integers(0, 32, (16, 16)).astype(np.uint8)
-    synthesize(exemplar, (4, 4, 4), scales=1, max_sweeps=1, rng=0, device=device, vector_width=vector_width)
 
-
-def try_device(dev: Any, vector_width: int | None) -> ProbeResult:
-    """In this process: run the tiny kernel, then (if *vector_width*) a tiny synthesis."""
+def try_device(dev: Any, vector_width: int | None, targets: list[str] | None = None) -> ProbeResult:
+    """In this process: run the tiny kernel, then (if *vector_width*) the smoke tests (*targets*,
+    default every registered one)."""
     import pyopencl as cl
 
-    from .device import Device
+    from .platforms import Device
 
     try:
         ctx = cl.Context([dev])
@@ -121,7 +139,7 @@ def try_device(dev: Any, vector_width: int | None) -> ProbeResult:
         if not np.allclose(out, _expected(4, 0.5), rtol=1e-4):
             return ProbeResult(False, f"the probe kernel ran but returned {out.tolist()}")
         if vector_width is not None:
-            _tiny_synthesis(Device(dev, ctx, queue), vector_width)
+            run_smoke_tests(Device(dev, ctx, queue), vector_width, targets)
     except (cl.Error, KernelBuildError) as exc:
         return ProbeResult(False, compiler_message(exc))
     return ProbeResult(True, "", vector_width)
@@ -132,7 +150,7 @@ def _in_child(dev: Any, vector_width: int | None) -> ProbeResult:
     env = dict(os.environ)
     with tempfile.TemporaryDirectory(prefix="clsolid-probe-") as scratch:
         env["POCL_CACHE_DIR"] = scratch  # a crashed build must not leave a broken binary in the user's cache
-        args = [sys.executable, "-m", "clsolid.core.probe", device_key(dev), str(vector_width or 0)]
+        args = [sys.executable, "-m", "clsolid.core.probe", device_key(dev), str(vector_width or 0), *SMOKE_TESTS]
         try:
             run = subprocess.run(args, env=env, capture_output=True, text=True, timeout=CHILD_TIMEOUT_S)
         except subprocess.TimeoutExpired:
@@ -196,18 +214,20 @@ def probe(dev: Any) -> ProbeResult:
     return result
 
 
-def _child_main(key: str, width: int) -> int:
-    """``python -m clsolid.core.probe KEY WIDTH``: probe the device whose key is KEY; print JSON."""
-    from .device import _devices_of, _platforms
+def _child_main(key: str, width: int, targets: list[str]) -> int:
+    """``python -m clsolid.core.probe KEY WIDTH TARGET...``: probe the device whose key is KEY
+    with the smoke tests TARGET; print JSON."""
+    from .platforms import devices_of, platforms
 
-    for platform in _platforms():
-        for dev in _devices_of(platform):
+    SMOKE_TESTS[:] = targets  # the parent's, so that the key matches
+    for platform in platforms():
+        for dev in devices_of(platform):
             if device_key(dev) == key:
-                print(json.dumps(asdict(try_device(dev, width or None))), flush=True)
+                print(json.dumps(asdict(try_device(dev, width or None, targets))), flush=True)
                 return 0
     print(f"no device has the key {key!r}", file=sys.stderr)
     return 2
 
 
 if __name__ == "__main__":
-    sys.exit(_child_main(sys.argv[1], int(sys.argv[2])))
+    sys.exit(_child_main(sys.argv[1], int(sys.argv[2]), sys.argv[3:]))

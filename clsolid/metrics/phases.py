@@ -16,10 +16,8 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import InputError
+from ..phases import MAX_PHASES
 from ._common import as_stack, check_int
-
-#: Most distinct grey levels for an image to be analysed as a few-phase image.
-MAX_PHASES = 8
 
 
 def phase_values(image: np.ndarray, max_phases: int = MAX_PHASES) -> np.ndarray | None:

@@ -30,7 +30,8 @@ import numpy as np
 from ..errors import InputError, NoDeviceError
 from .model import ScaleModel
 from .params import MLParams
-from .tiled import TileJob, TileResult, check_tile, run_tile
+from .contracts import TileJob, TileResult
+from .tiled import check_tile, run_tile
 
 #: Voxels of the random start one task draws (16 MB of float32).
 _INIT_RUN = 1 << 22
@@ -161,6 +162,7 @@ class DaskTiles:
             raise NoDeviceError("the Dask cluster has no workers: start some (dask worker ADDRESS), or use --workers N")
         self.workers = workers
         self.parallel = len(workers)  # tiles run at once, at most (the tiles' search time shared among them)
+        self.keeps_state = False  # each set's tiles go to whichever worker is free
         names = sorted(set(self._on_each(device_name, self.spec, options)))
         self.name = names[0] if len(names) == 1 else "; ".join(names)
         self.token = self.tables = self.sweep = None

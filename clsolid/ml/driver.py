@@ -11,7 +11,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .balance import project_bias, score_rows, score_stride, softmax, sweep_target
+from ..balance import project_bias, score_rows, score_stride, softmax, sweep_target
 from .forecast import affordable, forecast_visits, proxy_visits
 from ..exemplar import nearest_level_index
 from .model import ScaleModel, build_scale, check_exemplar_fits, parent_block
@@ -66,7 +66,7 @@ _INDEX_RUN = 1 << 20  # voxels whose label index is found, or counted, at once
 
 class Balance:
     """The label-histogram balance of one scale: the bias that keeps the volume's label
-    fractions at the exemplar's (the departure of clsolid.ml.balance).
+    fractions at the exemplar's (the departure of clsolid.balance).
 
     :meth:`after` is called after every conflict-free set and returns the bias for the
     next one, so the bias follows the volume within a sweep: a bias fitted once per sweep
@@ -288,7 +288,7 @@ def run_ml(
     Returns the full-resolution volume, the timings and the per-scale bandwidths.
     """
     check_exemplar_fits(labels_img.shape, params)
-    scratch = getattr(backend, "scratch", None) or Scratch()  # a tiled back end's, where it keeps the state
+    scratch = backend.scratch or Scratch()  # a tiled back end's, where it keeps the state
     levels = list(range(params.scales - 1, -1, -1))
     models = [build_scale(labels_img, shape, params, lv) for lv in levels]
     backend.prepare(models, params)  # refuses, before allocating, what the device cannot hold
@@ -347,7 +347,7 @@ def run_ml(
         scratch.free(temp)  # the back end holds the state now (its own temperatures): free the host's copies
         vol = temp = None
         for sweep in range(first, n_sweeps + 1):
-            t_sweep, searched_before = time.perf_counter(), getattr(backend, "search_seconds", 0.0)
+            t_sweep, searched_before = time.perf_counter(), backend.search_seconds
             scratch.free(active)  # the last sweep's
             if annealing:
                 active = scratch.apply(lambda i: ~i | resynth, bool, inherited)
@@ -372,7 +372,7 @@ def run_ml(
                 t_prev, t_now = t_now, float(np.sum(backend.temperature(), dtype=np.float64))
             visited = int(active.sum())
             sweep_s = time.perf_counter() - t_sweep
-            searched = getattr(backend, "search_seconds", 0.0) - searched_before
+            searched = backend.search_seconds - searched_before
             record["temperatures"].append(t_now)
             record["visited"].append(visited)
             record["sweep_seconds"].append(sweep_s)

@@ -20,11 +20,11 @@ parent, at t = 0, each term times that weight (:func:`parent_tables`, :func:`par
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable
 
 import numpy as np
 
 from ..errors import InputError
+from ..phases import phase_costs
 from .params import VIEW_AXES, MLParams
 from ..core.schedule import colour_set, colour_sets, set_count
 
@@ -115,25 +115,6 @@ def difference(a: np.ndarray, b: np.ndarray, mismatch: bool, costs: np.ndarray |
         c = np.asarray(costs, np.float64)
         return np.where(a != b, c[a.astype(np.intp)] + c[b.astype(np.intp)], 0.0)
     return (a != b).astype(np.float64) if mismatch else (a - b) ** 2
-
-
-def phase_costs(labels_img: np.ndarray) -> np.ndarray:
-    """float32 ``(L,)``: each label's half of a weighted mismatch, ``1 / (2 f_l)`` (f_l: its
-    fraction in *labels_img*, labels 0..L-1), so that a mismatch between phases a and b costs
-    ``1/(2 f_a) + 1/(2 f_b)``: the chi-square distance of correspondence analysis, under which a
-    rare phase's pixel weighs as much as the matrix's do together. Two phases with the same
-    fraction are moved one float apart: the kernels tell phases apart by their costs."""
-    f = np.bincount(labels_img.ravel().astype(np.intp)) / labels_img.size
-    return make_distinct((0.5 / f).astype(np.float32), lambda c: np.nextafter(c, np.float32(np.inf)))
-
-
-def make_distinct(codes: np.ndarray, step: Callable[[Any], Any]) -> np.ndarray:
-    """*codes* (in place) with each code equal to an earlier one moved up by *step* until it
-    is not: the kernels tell phases apart by their codes."""
-    for i in range(1, codes.size):
-        while np.any(codes[:i] == codes[i]):
-            codes[i] = step(codes[i])
-    return codes
 
 
 def phase_sigma(image: np.ndarray, costs: np.ndarray | None = None) -> float:

@@ -7,7 +7,7 @@ import time
 import numpy as np
 
 from ..core import programs
-from .balance import n_score_slots, score_stride
+from ..balance import n_score_slots, score_stride
 from ..core.device import Device
 from ..errors import DeviceMemoryError, InputError
 from .model import ScaleModel, difference
@@ -72,6 +72,9 @@ class CLBackend:
     max_batch : int
         Most voxels relaxed per launch (bounds the scratch buffer).
     """
+
+    #: The state lives on the device.
+    scratch = None
 
     def __init__(self, device: Device, *, vector_width: int | None = None, voxels_per_item: int = 4,
                  local_size: int = 16, max_batch: int = 32768):
@@ -454,7 +457,7 @@ class CLBackend:
 
     def scores(self) -> np.ndarray:
         """Combined log scores before the bias, ``(slots, labels)``, of the voxels whose flat
-        index is a multiple of :func:`clsolid.ml.balance.score_stride` (row = index / stride), as
+        index is a multiple of :func:`clsolid.balance.score_stride` (row = index / stride), as
         their last visit left them."""
         import pyopencl as cl
 

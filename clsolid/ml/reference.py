@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .balance import n_score_slots, score_stride
+from ..balance import n_score_slots, score_stride
 from . import pruned
 from .model import ScaleModel, difference, wrapped_coords  # noqa: F401 (wrapped_coords: also this module's name)
 from ..core.philox import TAG_INIT, bounded, unit_float, voxel_uint32, voxel_words
@@ -190,6 +190,9 @@ class ReferenceBackend:
     """The float64 NumPy back end; same interface as :class:`clsolid.ml.opencl.CLBackend`."""
 
     name = "numpy-float64-reference"
+    scratch = None  # the state lives here, in memory
+    search_seconds = 0.0  # no projected search
+    exact_visits = pruned_visits = 0
 
     def prepare(self, models, params=None) -> None:
         """Nothing to reserve on the host."""

@@ -27,17 +27,17 @@ host keeps the balance's score rows the tiles give back, so the volume is the sa
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any, Iterable, Iterator
 
 import numpy as np
 
+from ..balance import n_score_slots, score_rows, score_stride
 from ..core.scratch import Scratch
 from ..core.tiles import Tiling, gather
 from ..errors import DeviceMemoryError, InputError
-from .balance import n_score_slots, score_rows, score_stride
 from .model import ScaleModel
 from .params import MLParams
+from .contracts import TileJob, TileResult, TileRunner
 from .pruned import COHERENCE_REACH
 
 
@@ -95,35 +95,6 @@ def check_edge(tile) -> int:
     return int(tile)
 
 
-@dataclass
-class TileJob:
-    """What a tile needs to relax its voxels of one set: its state, halo included (gathered
-    by :func:`clsolid.core.tiles.gather`), where it lies, the voxels (the tile's flat
-    indices) and the balance's score rows of those voxels that have one."""
-
-    volume: np.ndarray | None  # None: the engine holds the tile's current state already (resident)
-    temperature: np.ndarray | None
-    sources: np.ndarray | None
-    origin: tuple[int, int, int]
-    voxels: np.ndarray
-    score_rows: np.ndarray
-    parent: np.ndarray | None = None  # the tile's parent block, halo included (parent terms only)
-
-
-@dataclass
-class TileResult:
-    """What a tile gives back: its voxels' values, temperatures and sources ``(views, m)``,
-    the rows of scores asked for, the visits it made with each sum ``(exact, pruned)`` and the
-    seconds its projected search took."""
-
-    values: np.ndarray
-    temperatures: np.ndarray
-    sources: np.ndarray
-    scores: np.ndarray
-    visits: tuple[int, int]
-    searched: float = 0.0
-
-
 def run_tile(engine: Any, job: TileJob) -> TileResult:
     """Relax a tile's voxels of a set on *engine* (a :class:`~clsolid.ml.opencl.CLBackend`
     holding the scale's tables and the sweep's arguments)."""
@@ -146,6 +117,8 @@ class LocalTiles:
 
     #: One engine runs every tile, so the state of the last tile it ran stays on its device.
     keeps_state = True
+    #: One tile at a time.
+    parallel = 1
 
     def __init__(self, engine: Any) -> None:
         self.engine, self.name = engine, engine.name
@@ -184,10 +157,10 @@ class TiledBackend:
         in memory). The driver allocates its own whole-block arrays there too.
     """
 
-    def __init__(self, runner: Any, tile: int, scratch: Scratch | None = None) -> None:
+    def __init__(self, runner: TileRunner, tile: int, scratch: Scratch | None = None) -> None:
         self.tile = check_edge(tile)
         self.scratch = Scratch() if scratch is None else scratch
-        self.runner = runner if hasattr(runner, "map") else LocalTiles(runner)
+        self.runner = runner
         self.name = self.runner.name
         self.exact_visits = self.pruned_visits = 0  # voxel visits by sum, in the pruned mode
         self.search_seconds = 0.0  # the tiles' projected search, per worker running them at once
@@ -235,7 +208,7 @@ class TiledBackend:
                 else TileJob(gather(self._vol, tile), gather(self._temp, tile), gather(self._src, tile), tile.origin,
                              tile.local(part), rows, None if self._parent is None else gather(self._parent, tile))
                 for i, (tile, part, rows) in enumerate(groups))
-        if groups and getattr(self.runner, "keeps_state", False):
+        if groups and self.runner.keeps_state:
             self._held = groups[-1][0].start
         src = self.sources()
         for (tile, part, rows), r in zip(groups, self.runner.map(jobs)):
@@ -243,7 +216,7 @@ class TiledBackend:
             self._scores[rows] = r.scores
             self.exact_visits += r.visits[0]
             self.pruned_visits += r.visits[1]
-            self.search_seconds += r.searched / getattr(self.runner, "parallel", 1)
+            self.search_seconds += r.searched / self.runner.parallel
 
     def volume(self) -> np.ndarray:
         return self._vol

@@ -4,7 +4,7 @@
 A phase's grey value is a name, not a number: by squared differences phases 85 and 170 are
 nearer than 0 and 255, and a three- or four-phase exemplar is matched by an order its phases
 do not have. With phase codes the finest level compares phases as the likelihood method's
-weighted mismatch does (:func:`clsolid.ml.model.phase_costs`): a mismatch between phases a and
+weighted mismatch does (:func:`clsolid.phases.phase_costs`): a mismatch between phases a and
 b costs ``c_a + c_b``, with ``c_p = S / (2 f_p)`` (f_p the phase's fraction: a rare phase's
 shapes weigh as much as the matrix's), an equal pair nothing. Each phase's value is replaced
 by its code in the matched squares, exemplar and block alike, and the matcher adds
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exemplar import nearest_level_index
-from ..ml.model import make_distinct, phase_costs
+from ..phases import make_distinct, phase_costs
 
 
 @dataclass(frozen=True)

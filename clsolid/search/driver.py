@@ -23,6 +23,7 @@ from ..core.schedule import colour_set, set_count, set_order
 from ..core.slices import insert_slices
 from ..core.synthesis import SweepInfo
 from ..errors import InputError
+from ..phases import is_categorical
 from . import chenwang, coherence, kopf, wl
 from .features import centre_weights, exemplar_features, site_use, valid_sites
 from .level import Level, LevelHistogram
@@ -69,7 +70,7 @@ def level_shapes(shape: tuple[int, int, int], levels: int) -> list[tuple[int, in
 def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: SearchParams, seed: int,
                make_matcher: Callable[[np.ndarray], Any],
                progress: Callable[[SweepInfo], None] | None = None,
-               count_sites: bool = False) -> SearchOutput:
+               count_sites: bool = False, categorical: bool | None = None) -> SearchOutput:
     """Grow a ``shape`` block from a 2D *exemplar* (float grey levels) with ``params.method``.
 
     *make_matcher(table, mismatch=n)* returns an object with ``best(queries, weights)`` (a
@@ -79,9 +80,12 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
     *progress* gets a :class:`~clsolid.core.synthesis.SweepInfo` after every pass (no
     temperatures: those fields are NaN). Returns a :class:`SearchOutput`; with *count_sites*
     its position histogram counts, for ``chen-wang``, each voxel's source, and for the others
-    every voxel matched once more in every view.
+    every voxel matched once more in every view. *categorical*: whether the exemplar's values
+    are phases (:func:`clsolid.phases.is_categorical`; None: by their number alone).
     """
-    params = params.for_exemplar(np.unique(exemplar).size)
+    n_values = np.unique(exemplar).size
+    categorical = is_categorical(n_values) if categorical is None else categorical
+    params = params.for_exemplar(n_values, categorical)
     k = params.neighborhood
     shapes = level_shapes(shape, params.scales)
     if min(shapes[-1]) < 2:
@@ -101,7 +105,8 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
         codes = phase_codes(pyr[0]) if params.distance == "weighted" and level == 0 else None
         searched = _searched_table(table, codes, k, params.parent_weight)
         matcher = make_matcher(searched, mismatch=0 if codes is None else k * k)
-        ctx = _level(params, pyr, level, parent_shape, table, searched, centres, vol, matcher, make_matcher, coh)
+        ctx = _level(params, pyr, level, parent_shape, table, searched, centres, vol, matcher, make_matcher, coh,
+                     categorical)
         ctx.codes = codes
         coh = ctx.coherence
         update = UPDATES[params.method]
@@ -120,7 +125,7 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
             else:
                 for c in set_order(n_sets, seed, level, it):
                     searches += update(ctx, vol, parent, colour_set(shapes[level], n_sets, c))
-            if params.specify and ctx.values.size > kopf.MAX_PHASES:
+            if params.specify and not ctx.phases:
                 _specify(ctx, vol, pyr[level])
             if anchors is not None:
                 _rewrite(ctx, vol, *anchors)
@@ -144,7 +149,7 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
 
 def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape: tuple[int, int] | None,
            table: np.ndarray, searched: np.ndarray, centres: np.ndarray, vol: np.ndarray, matcher: Any,
-           make_matcher: Callable[..., Any], coarser: coherence.Coherence | None) -> Level:
+           make_matcher: Callable[..., Any], coarser: coherence.Coherence | None, categorical: bool) -> Level:
     """One level's :class:`Level`: weights, and what the method and search keep: kopf's
     grey-level histogram, chen-wang's candidate sets and histograms, the coherence state
     (started from the *coarser* level's). *table* holds the sites' grey values, *searched*
@@ -154,7 +159,7 @@ def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape
                 patches=table[:, : k * k].astype(np.float64), values=np.unique(pyr[level]),
                 w_first=centre_weights(k, use_parent, centre=False, causal=params.causal),
                 w_again=centre_weights(k, use_parent, centre=True, causal=params.causal),
-                span=float(np.ptp(pyr[0])) or 1.0)
+                span=float(np.ptp(pyr[0])) or 1.0, categorical=categorical)
     if params.method == "kopf":
         ctx.histogram = LevelHistogram(pyr[0], pyr[level], vol, params.view_names if params.histogram == "slice" else ())
     n_cw = params.candidates if params.method == "chen-wang" else 0
@@ -169,7 +174,7 @@ def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape
         # A level that searches every site only records its matches (for the finer level's
         # start): it needs neither the phase candidates nor the sites' use.
         ranks = _search_at(params, level) == "coherence"
-        if ranks and params.method == "kopf" and ctx.values.size <= kopf.MAX_PHASES:  # for its phase balance
+        if ranks and params.method == "kopf" and ctx.phases:  # for its phase balance
             similar = np.hstack([similar, coherence.phase_nearest(make_matcher, searched, centres, ctx.w_again,
                                                                   matcher.mismatch)])
         eps = kopf.EPS_REL * ctx.span if ranks and params.index_histogram else None  # Kopf's eps, as chen-wang's

@@ -28,10 +28,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.views import VIEW_AXES
-from ..ml.balance import project_bias, sweep_target
+from ..balance import project_bias, sweep_target
 from .level import Level
 from .match import square_offsets
-from .params import MAX_PHASES
 from .wl import matches
 
 #: The robust norm's exponent ("as indicated by [Kwa05]").
@@ -80,9 +79,9 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
     w = robust_weights(ssd, level.span) * factor
     flat = vol.reshape(-1)
     old = flat[voxels].copy()
-    if hist.values.size <= MAX_PHASES:
+    if level.categorical:
         # the balance counts phases: only at a level whose exemplar holds nothing but phases
-        balanced = level.params.balance and level.values.size <= MAX_PHASES
+        balanced = level.params.balance and level.phases
         new = balanced_set_vote(level, values, w, old) if balanced else vote(values, w)
     else:
         new = (w * values).sum(axis=0) / w.sum(axis=0)
@@ -96,7 +95,7 @@ def balanced_set_vote(level: Level, values: np.ndarray, weights: np.ndarray, old
 
     The set's voxels aim at the fractions that bring the whole block (the other voxels as they
     are, *old* the set's current values) to the exemplar's, ``balance`` of the way
-    (:func:`clsolid.ml.balance.sweep_target`); :func:`vote_balanced` meets them where the
+    (:func:`clsolid.balance.sweep_target`); :func:`vote_balanced` meets them where the
     views' matches disagree. A phase no view proposes for a voxel stays out of its vote.
     """
     hist = level.histogram
@@ -135,7 +134,7 @@ def overlap_support(level: Level, vol: np.ndarray,
     proposes ``patches[p, j]`` for the voxel ``u + offset_j`` of the view's plane (wrapping),
     with weight ``w_u * h(value)`` (robust weight, histogram factor). ``den`` sums the
     weights each voxel receives; ``num[0]`` the weighted values (``phases`` None), or,
-    where the level's exemplar holds only phases (at most :data:`MAX_PHASES` values: the
+    where the level's exemplar holds only phases (:attr:`Level.phases`: the
     finest level of a categorical exemplar), ``num[i]`` the weight proposing ``phases[i]``.
     """
     k = level.params.neighborhood
@@ -145,7 +144,7 @@ def overlap_support(level: Level, vol: np.ndarray,
     w = robust_weights(ssd, level.span)
     patch_bins = hist.bin(level.patches).reshape(level.patches.shape)  # once a pass, not once a proposal
     # Coarser levels of a categorical exemplar's pyramid are blends: they take the mean.
-    phases = level.values if level.values.size <= MAX_PHASES else None
+    phases = level.values if level.phases else None
     num = np.zeros((1 if phases is None else phases.size,) + vol.shape)
     den = np.zeros(vol.shape)
     for i, view in enumerate(level.params.view_names):
@@ -166,7 +165,7 @@ def overlap_support(level: Level, vol: np.ndarray,
 def vote_balanced(support: np.ndarray, target: np.ndarray) -> np.ndarray:
     """Per voxel, the phase of largest ``log support + b`` (``support`` is ``(phases, n)``).
 
-    The per-phase bias b is the likelihood method's balance (:func:`clsolid.ml.balance.project_bias`)
+    The per-phase bias b is the likelihood method's balance (:func:`clsolid.balance.project_bias`)
     fitted to the sharpened scores ``SHARPNESS * log support``: with them, the softmax that
     the balance matches to the *target* fractions is close to the argmax that decides (at
     sharpness 1, diffuse supports miss the target widely). Kopf's histogram factor only

@@ -15,6 +15,7 @@ from .features import voxel_features
 from .match import CLMatcher
 from .params import SearchParams
 from .projection import Projection
+from ..phases import is_categorical
 
 
 class LevelHistogram:
@@ -80,7 +81,8 @@ class Level:
     (:class:`~clsolid.search.chenwang.Sources`) for ``chen-wang``, ``coherence``
     (:class:`~clsolid.search.coherence.Coherence`) for the accelerated search; ``codes``
     (:class:`~clsolid.search.codes.PhaseCodes`) where the squares compare phase codes
-    (the matcher's table holds them; ``patches`` and ``centres`` stay grey values)."""
+    (the matcher's table holds them; ``patches`` and ``centres`` stay grey values);
+    ``categorical`` whether the exemplar's values are phases (:func:`clsolid.phases.is_categorical`)."""
 
     params: SearchParams
     matcher: Any
@@ -90,6 +92,7 @@ class Level:
     w_first: np.ndarray
     w_again: np.ndarray
     span: float
+    categorical: bool = False
     histogram: LevelHistogram | None = None
     sources: Any = None
     coherence: Any = None
@@ -97,6 +100,12 @@ class Level:
     seeding: bool = False  # ...and seeds the candidates of the passes after (exact_passes)
     codes: Any = None
     _projections: dict = field(default_factory=dict, init=False, repr=False)  # by weights: projection()
+
+    @property
+    def phases(self) -> bool:
+        """Whether this level's exemplar holds nothing but the categorical exemplar's phases
+        (its finest level; a coarser level's are blends)."""
+        return self.categorical and is_categorical(self.values.size)
 
     @cached_property
     def block(self) -> DeviceBlock | None:

@@ -253,10 +253,13 @@ class CLMatcher:
     mismatch : int
         The leading terms of a row that are phase codes, compared by weighted mismatch
         (:mod:`clsolid.search.codes`); 0 (default): every term by squared difference.
+    vector_width : int, optional
+        Sites per vector in the kernels (4, 8 or 16); None: the widest the device's compiler
+        handles (:func:`clsolid.core.probe.probe`).
     """
 
     def __init__(self, device: Device, table: np.ndarray, weights: np.ndarray | None = None,
-                 max_batch: int = 65536, mismatch: int = 0) -> None:
+                 max_batch: int = 65536, mismatch: int = 0, vector_width: int | None = None) -> None:
         import pyopencl as cl
 
         self.table = np.ascontiguousarray(table, np.float32)
@@ -269,7 +272,11 @@ class CLMatcher:
                              ("match results", self.max_batch * MAX_K * 4)):
             if nbytes > device.max_alloc:
                 raise DeviceMemoryError(name, nbytes, device.max_alloc)
-        self._vw = probe(device.device).vector_width or VECTOR_WIDTHS[0]
+        if vector_width is None:
+            vector_width = probe(device.device).vector_width or VECTOR_WIDTHS[0]
+        if vector_width not in VECTOR_WIDTHS:
+            raise InputError(f"vector_width={vector_width!r} must be one of {VECTOR_WIDTHS}")
+        self._vw = vector_width
         self.n_pad = -(-self.table.shape[0] // self._vw) * self._vw
         self._layouts: dict[bytes, _Layout] = {}
         self._layout = self._layout_of(_weights(weights, self.dim))
