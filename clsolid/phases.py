@@ -4,7 +4,7 @@ One rule decides it for every method and for the evaluation: an exemplar is *cat
 when its own values are kept (it holds at most ``levels`` distinct values, so none is a
 quantisation of grey levels) and there are at most :data:`MAX_PHASES` of them. Its voxels
 then take a phase, never a blend, and the methods compare phases as names
-(docs/design.md, "Categorical exemplars").
+(docs/design.md#categorical-exemplars).
 """
 
 from __future__ import annotations

@@ -29,6 +29,7 @@ extensions = [
     "sphinx.ext.mathjax",
     "numpydoc",
     "cli_reference",
+    "option_reference",
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
@@ -44,6 +45,9 @@ myst_heading_anchors = 3
 # The generated command-line reference (docs/_ext/cli_reference.py).
 cli_reference_parser = "clsolid.cli:build_parser"
 cli_reference_output = "reference/cli.md"
+# The generated option reference (docs/_ext/option_reference.py), from the options' declarations.
+option_reference_source = "clsolid.cli.synth:option_reference"
+option_reference_output = "reference/options.md"
 
 # API reference: numpydoc renders the docstrings; signatures without type hints (the
 # docstrings give the types).

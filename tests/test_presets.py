@@ -98,3 +98,12 @@ def test_preset_runs_and_is_recorded(tmp_path, device):
     params = meta["params"]
     assert (params["neighborhood"], params["relaxation"], params["upsampling"], params["insert_slices"],
             params["scales"]) == (7, "icm", "8/8", 2, 2)
+
+
+def test_every_search_preset_turns_kopfs_departures_off():
+    """The thesis's NP_K: no histogram specification, balance, anchor slices, heavier parent or phase codes."""
+    thesis = {"specify": False, "balance": 0.0, "insert_spacing": 0.0, "parent_weight": 1.0, "distance": "squared",
+              "search": "exact"}
+    for preset in PRESETS.values():
+        if preset.method != "ml":
+            assert {k: preset.options.get(k) for k in thesis} == thesis, preset.name

@@ -186,6 +186,21 @@ def add_synth(sub: Any, show_all: bool = False) -> argparse.ArgumentParser:
     return p
 
 
+def option_reference() -> str:
+    """The option reference page (Markdown): every option of every declaring class, one table each."""
+    from ..core.options import reference_markdown
+
+    titles = {"command": "The command's own (`clsolid synth`)", "ml": "`ml`: `MLParams`",
+              "wl, kopf, chen-wang": "`wl`, `kopf`, `chen-wang`: `SearchParams`", "backend": "Back end: `BackendOptions`"}
+    head = ["# Option reference", "",
+            "<!-- Generated at build time by docs/_ext/option_reference.py from the options' declarations; "
+            "do not edit. -->", "",
+            "Every option, as declared once in the code: its Python name (a keyword of `clsolid.synthesize`, or "
+            "of `clsolid.BackendOptions`), its `clsolid synth` flag, the values it takes and its default. Options "
+            "marked advanced appear in `clsolid synth --help-all` only.", ""]
+    return "\n".join(head) + "\n" + "\n".join(reference_markdown(cls, titles[who]) for who, cls in SOURCES)
+
+
 # ----------------------------------------------------------------------------- settings
 
 

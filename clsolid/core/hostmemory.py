@@ -26,7 +26,7 @@ class Footprint:
     per_voxel : int
         Bytes a voxel of the full-resolution block costs at the run's peak: the growth of
         peak RSS with the block, measured where device buffers are host memory, with room
-        kept above it (docs/design.md, "Host memory").
+        kept above it (docs/design.md#host-memory).
     per_exemplar_term : int
         Bytes each term of the exemplar's windows costs (:func:`exemplar_terms`); 0: not counted.
     advice : str

@@ -438,7 +438,7 @@ def reference_rows(cls: Any) -> list[dict[str, str]]:
     for f, spec in declared(cls):
         check = spec.check
         rows.append({"name": f.name, "flag": spec.flag_name(f.name) or ("(positional)" if spec.positional else ""),
-                     "values": check.describe() + (f", or None ({spec.none})" if spec.none else ""),
+                     "values": check.describe() + (", or None" if spec.none else ""),
                      "default": default_text(f, spec), "help": spec.help, "group": spec.group,
                      "advanced": "yes" if spec.advanced else ""})
     return rows

@@ -7,14 +7,14 @@ labels, a byte a voxel each. In memory that bounds the block by the host's memor
 (512^3 takes about 6 GB, 1024^3 about 48). With a scratch folder those arrays are
 ``numpy.memmap`` files there instead, which the operating system pages in and out: the block
 is bounded by the disk, and by the memory the arrays that stay in memory take (about a byte
-a voxel; README, Using it). The arrays are the same either way, so the volume is too. The
+a voxel; docs/user-guide/large-volumes.md). The arrays are the same either way, so the volume is too. The
 run's result is made there as well, in nameless files that live as long as its arrays
 (:func:`kept_memmap`), and :func:`clsolid.volumeio.save_volume` writes it a plane at a time.
 
 Every conflict-free set spreads over the whole block, so a sweep reads and writes the whole
 state once per set; where the state is larger than the memory left for the page cache each
 set streams it from the disk. On a CPU the compute of a sweep at such sizes outweighs that
-(README, Using it); on a fast device the disk may set the pace.
+(docs/design.md#region-order); on a fast device the disk may set the pace.
 """
 
 from __future__ import annotations

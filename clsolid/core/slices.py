@@ -1,7 +1,6 @@
 """``+in`` slices: exemplar slices written into the block at staggered depths of each
 constrained view, shared by the likelihood method (Urs thesis, §4.3.1, §4.3.5.1) and, as
-an anchor against mirror-image blocks, the search methods (docs/design.md, "Anchor
-slices").
+an anchor against mirror-image blocks, the search methods (docs/design.md#anchor-slices).
 
 The functions take a *plan*: any parameters object with ``scales``, ``views`` (2 or 3),
 ``view_names``, ``slice_layout`` (``"aligned"`` or ``"staggered"``), ``insert_slices`` (a
@@ -44,12 +43,11 @@ FALLBACK_SPACING = 6.0
 #: longer than the exemplar), that many pixels on each side of the seam are left out (at least
 #: 1 at coarser scales), on exemplars whose seam shows (:func:`seam_ratio` above SEAM_SHOWS):
 #: the seam joins pixels that are not neighbours in the exemplar, and the likelihood sums only
-#: windows inside it, so no window supports what the seam shows (docs/design.md, "Seam-free
-#: +in slices").
+#: windows inside it, so no window supports what the seam shows (docs/design.md#seam-gap).
 SEAM_GAP = 2
 #: The :func:`seam_ratio` above which an exemplar's seam shows: above what exemplars made to
 #: wrap and photographs of fine-grained textures measure, below what photographs of coarse
-#: textures do (docs/design.md, "Seam-free +in slices").
+#: textures do (docs/design.md#seam-gap).
 SEAM_SHOWS = 2.0
 
 
@@ -132,7 +130,7 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, plan: Any, level: int
     i + j is even, slice j of the other if it is odd, so that no view's slices carry all the
     foreign lines (written in view order, as aligned slices still are, every front slice
     would hold the right slices' columns, and the front view match the exemplar worse;
-    docs/design.md, "Staggered +in slices"). Returns the mask
+    docs/design.md#staggered-slices). Returns the mask
     of inserted voxels (marked in *mask*, an array of False of *vol*'s shape such as a scratch
     file's, if given); they start each scale trusted (t = 0), like inherited voxels: under
     ICM a voxel at t = 1 ignores its neighbours, so untrusted slices would be overwritten

@@ -22,7 +22,7 @@ def serial_blas() -> Iterator[None]:
     balance's Hessian, sampled voxels x labels, after every conflict-free set). A BLAS pool
     of several threads spins for cores that the OpenCL CPU runtime's threads hold, and
     gains nothing on matrices this small: it slows the sweeps with the balance several-fold
-    (docs/design.md, "The host's BLAS threads"). OpenBLAS splits a product by rows and
+    (docs/design.md#blas-threads). OpenBLAS splits a product by rows and
     columns, not along the sum, so one thread gives the same results bit for bit.
     """
     with _controller().limit(limits=1, user_api="blas"):

@@ -77,7 +77,7 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
     Notes
     -----
     Cost grows with the slices measured, most of it tracing fringes (timings:
-    docs/performance.md).
+    docs/benchmarks.md).
     """
     ex = as_image(exemplar, "exemplar", min_side=MIN_EXEMPLAR_SIDE)
     vol = as_volume(volume, "volume", min_side=MIN_VOLUME_SIDE)

@@ -23,7 +23,7 @@ _RUN, _DEVICE = "run", "device"
 #: The host memory of a likelihood run, in one piece or in tiles: the block's values,
 #: temperatures and sources beside the driver's start state and the output (device buffers
 #: count where the device is the host's CPU), and each term of the exemplar's windows at every
-#: scale with its device copies and similar-window tables (docs/design.md, "Host memory").
+#: scale with its device copies and similar-window tables (docs/design.md#host-memory).
 FOOTPRINT = Footprint(48, 56, ", keep a tiled run's state on disk (tile= and scratch=, --tile N --scratch DIR: "
                               "about 4 bytes a voxel stay in memory)")
 #: The same run with its state, the result and the ``+in`` mask in a scratch folder: only

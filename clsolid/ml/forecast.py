@@ -8,8 +8,7 @@ without a single likelihood: the same conflict-free sets, in the same seeded ord
 the float64 reference's temperature update. The replay costs one neighbourhood sum per
 voxel and sweep, against the run's sum over every exemplar site; but it runs in NumPy, on
 one core, and the pruned sum is cheap: on a large block the finest scale's replay would
-take a large share of the run, all of it before the first sweep (docs/design.md, "The
-ETA's replay"). So a scale whose sweep would sum more than
+take a large share of the run, all of it before the first sweep (docs/design.md#progress-estimate). So a scale whose sweep would sum more than
 :data:`REPLAY_TERMS` neighbour terms is not replayed (:func:`affordable`); a smaller block
 with the same structure is replayed in its place (:func:`proxy_visits`): the same rule,
 inherited corners and ``+in`` slice spacing, on a torus of a side that fits the budget,
@@ -34,7 +33,7 @@ from .reference import new_temperature
 #: sum: 2^26, an 11 x 11 run up to about 65^3 (241 neighbours), 9 x 9 to 74^3; a larger scale
 #: replays a proxy of that side, a second or two. A larger budget makes the replay a sizeable
 #: share of a pruned run; a smaller one, a proxy too small to forecast the run's sweeps
-#: (docs/design.md, "The ETA's replay").
+#: (docs/design.md#progress-estimate).
 REPLAY_TERMS = 2**26
 
 

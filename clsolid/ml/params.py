@@ -43,33 +43,33 @@ UPSAMPLING = ("1/8", "8/8")
 SLICE_LAYOUTS = ("aligned", "staggered")
 INHERITED = ("resynthesize", "fixed")
 #: +in slices about every this many voxels of a view's depth; each slice anchors content that
-#: no mirror-symmetric state shares (docs/design.md, "Inserted slices").
+#: no mirror-symmetric state shares (docs/design.md#inserted-slices).
 DEFAULT_INSERT_SPACING = FALLBACK_SPACING
 #: Denser slices on categorical exemplars, which keep less of the mirror in check otherwise;
-#: grey ones lose structure with them (docs/design.md, "Inserted slices").
+#: grey ones lose structure with them (docs/design.md#inserted-slices).
 CATEGORICAL_INSERT_SPACING = 5.0
 #: How the exemplar of each coarser scale is made. "binomial" low-passes with [1 2 1]/4 before
 #: keeping the even pixels (a Gaussian pyramid, thesis ch. 3); "decimate" keeps them unfiltered
 #: (thesis §2.5). One-pixel lines, like brick's mortar, vanish at random under plain decimation.
 PYRAMIDS = ("binomial", "decimate")
 #: Silverman's bandwidth times this: at Silverman's own, ICM merges neighbouring grey levels
-#: (mode-seeking; docs/design.md, "Bandwidth").
+#: (mode-seeking; docs/design.md#bandwidth).
 DEFAULT_BANDWIDTH_FACTOR = 0.2
 #: Gaussian fall-off sigma (pixels) of the window terms on grey exemplars: the nearest
-#: neighbours weigh most; categorical ones keep every term alike (docs/design.md, "Fall-off").
+#: neighbours weigh most; categorical ones keep every term alike (docs/design.md#falloff).
 GREY_FALLOFF = 3.0
 #: The weight of the window terms along the axis two constrained views share, on categorical
 #: exemplars with two views: counted in both views' windows, they make features taller than
-#: wide; grey ones keep them, or fringes and courses lose their spacing (docs/design.md, "Shared axis").
+#: wide; grey ones keep them, or fringes and courses lose their spacing (docs/design.md#shared-axis).
 CATEGORICAL_SHARED_WEIGHT = 0.0
 #: Which terms shared_weight < 1 weighs (clsolid.ml.model.term_weights). "line": the shared
 #: axis's own terms (the voxels straight above and below) weigh W, the rest 1; "direction":
 #: every term 1 - (1 - W) cos^2 of its angle to that axis, so that a term just off the axis,
-#: which says nearly what the axis's own say, weighs nearly as little (docs/design.md, "Shared axis").
+#: which says nearly what the axis's own say, weighs nearly as little (docs/design.md#shared-axis).
 SHARED_PROFILES = ("direction", "line")
 #: Each coarser-scale 3 x 3 parent term's weight on categorical exemplars, at the scales whose
 #: coarser exemplar is at least PARENT_MIN_SIDE wide: it keeps features wider than the window;
-#: from smaller coarser scales, and on grey exemplars, it costs (docs/design.md, "Parent terms").
+#: from smaller coarser scales, and on grey exemplars, it costs (docs/design.md#parent-terms).
 CATEGORICAL_PARENT_WEIGHT = 4.0
 PARENT_MIN_SIDE = 64
 
@@ -82,8 +82,7 @@ RELAXATIONS = ("icm", "gibbs", "annealing")
 #: How the Parzen sum is taken. "exact" sums over every exemplar site (the thesis);
 #: "pruned" over k-coherence candidates plus a sample of the other sites (clsolid.ml.pruned);
 #: "auto" prunes categorical exemplars and large grey ones (with projected candidates) and sums
-#: smaller grey ones exactly, where the pruned sum misses the nearest windows (docs/design.md,
-#: "Pruned likelihood").
+#: smaller grey ones exactly, where the pruned sum misses the nearest windows (docs/design.md#pruned-likelihood).
 LIKELIHOODS = ("auto", "exact", "pruned")
 #: Grey exemplars with at least this many sites at the finest scale (about 110^2 pixels at
 #: 11 x 11): "auto" prunes them too, with projected candidates on AUTO_PROJECTED_AXES axes.
@@ -106,7 +105,7 @@ _PROJECTED_AS_IT_RAN = {"prune_projected_probe": 0, "prune_projected_sweeps": 0}
 #: between phases a and b 1/(2 f_a) + 1/(2 f_b) (f: the exemplar's fractions; the chi-square
 #: distance), so that a rare phase's shapes count as much as the matrix's. On two labels all
 #: three are the same distance. "auto": "weighted" on categorical exemplars ("mismatch", the
-#: same, on two), "squared" on grey ones (docs/design.md, "Categorical exemplars").
+#: same, on two), "squared" on grey ones (docs/design.md#categorical-exemplars).
 DISTANCES = ("auto", "squared", "mismatch", "weighted")
 
 def canonical_heuristic(name: str) -> str:

@@ -7,7 +7,7 @@ from ..core.hostmemory import Footprint
 from ..core.probe import register_smoke_test
 
 #: The host memory of a search run: the block, its matches and sources per view, the level
-#: tables, the most that ``chen-wang`` takes (docs/design.md, "Host memory").
+#: tables, the most that ``chen-wang`` takes (docs/design.md#host-memory).
 FOOTPRINT = Footprint(120)
 
 register_smoke_test("clsolid.search.smoke:smoke_test")

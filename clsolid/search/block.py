@@ -1,8 +1,7 @@
 """A level's block on the matcher's device, for the kernels that gather the voxels' queries
 there (``kernels/search/gather.cl``: ``voxel_queries`` for the exhaustive search, and
 ``coherence_best``): sending the block, 4 bytes a voxel, costs far less than gathering a
-set's k x k squares on the host and sending those (docs/design.md, "Queries gathered on
-the device")."""
+set's k x k squares on the host and sending those (docs/design.md#queries-gathered-on-the-device)."""
 
 from __future__ import annotations
 

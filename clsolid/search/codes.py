@@ -1,5 +1,5 @@
 """Phase codes: how the search methods compare a categorical exemplar's phases
-(``distance="weighted"``; a departure, docs/design.md, "Phases compared as names").
+(``distance="weighted"``; a departure, docs/design.md#phase-distance).
 
 A phase's grey value is a name, not a number: by squared differences phases 85 and 170 are
 nearer than 0 and 255, and a three- or four-phase exemplar is matched by an order its phases

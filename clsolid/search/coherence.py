@@ -15,7 +15,7 @@ site centred on each phase (:func:`phase_nearest`). Without them a minority phas
 neighbours' matches stop proposing never comes back: kopf's phase balance only chooses
 among the phases the views' matches propose, so a minority phase dwindles. chen-wang, which
 has no balance, does without them: with them its phase fractions drift further from the
-exemplar's (docs/design.md, "Every phase proposed").
+exemplar's (docs/design.md#coherence-search).
 
 Each voxel's last match in each view is kept. A finer level starts from the coarser
 level's matches: the parent's site (r, c) becomes the site (2r + row parity, 2c + column

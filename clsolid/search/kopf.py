@@ -170,8 +170,7 @@ def vote_balanced(support: np.ndarray, target: np.ndarray) -> np.ndarray:
     the balance matches to the *target* fractions is close to the argmax that decides (at
     sharpness 1, diffuse supports miss the target widely). Kopf's histogram factor only
     lowers the weight of a phase the block has too much of, by at most 1 / (1 + s): too
-    little to bring a minority phase back to its fraction (docs/design.md, "kopf's phase
-    balance"). A phase no square proposes anywhere (support 0) stays out.
+    little to bring a minority phase back to its fraction (docs/design.md#kopf-balance). A phase no square proposes anywhere (support 0) stays out.
     """
     logs = SHARPNESS * np.log(np.maximum(support.T, np.finfo(np.float64).tiny))
     return np.argmax(logs + project_bias(logs, target), axis=1)

@@ -202,7 +202,7 @@ def candidate_sets(matcher: Any, table: np.ndarray, count: int, weights: np.ndar
 def _queries_per_item(device: Device, count: int) -> int:
     """Queries a work-item of ``k_nearest`` takes. On a CPU, 8 for the best match: each table
     vector loaded then serves eight, and the terms a second grow with the queries an item
-    takes up to eight (``tools/bench_search.py``; docs/design.md, "Queries per work-item").
+    takes up to eight (``tools/bench_search.py``; docs/design.md#queries-per-work-item).
     Otherwise 1: longer lists, and a GPU's work-items, would hold eight queries' private
     arrays (unmeasured on a GPU)."""
     return 8 if count == 1 and device.is_cpu else 1

@@ -31,19 +31,19 @@ SEARCHES = ("exact", "coherence")
 #: How the matched squares compare a categorical exemplar's phases (clsolid.search.codes):
 #: "squared" grey-level differences (the thesis), "weighted" mismatches of phase codes; "auto":
 #: for kopf weighted on categorical exemplars of 3 or more phases (on two the two agree), else
-#: squared (worse for chen-wang, mixed for wl: docs/design.md, "Phase codes").
+#: squared (worse for chen-wang, mixed for wl: docs/design.md#phase-codes).
 DISTANCES = ("auto", "squared", "weighted")
 #: kopf's weight of each parent term (the 9 of the coarser level's 3 x 3 square) against the
 #: k x k square's 1: it keeps the coarse structure that the finest level's matches otherwise
-#: drift from (docs/design.md, "Parent terms").
+#: drift from (docs/design.md#parent-terms).
 KOPF_PARENT_WEIGHT = 4.0
 #: chen-wang's candidate set size (Urs thesis §5.2.1, §6.3.3).
 DEFAULT_CANDIDATES = 15
-#: The principal components the coherence search's seeding passes compare (docs/design.md, "Coherence search").
+#: The principal components the coherence search's seeding passes compare (docs/design.md#coherence-search).
 DEFAULT_SEED_COMPONENTS = 16
 #: kopf's anchor slices: one about every 5 voxels of each constrained view's depth, as the
 #: likelihood method's +in slices on categorical exemplars; without them the coarse levels
-#: settle into mirror-symmetric blocks (docs/design.md, "Anchor slices").
+#: settle into mirror-symmetric blocks (docs/design.md#anchor-slices).
 DEFAULT_INSERT_SPACING = 5.0
 
 
@@ -119,7 +119,7 @@ class SearchParams:
 
     #: The anchor slices' layout, count and make (read by :mod:`clsolid.core.slices`): always
     #: staggered, their number set by ``insert_spacing``, each slice one exemplar window, seams
-    #: included where it wraps the exemplar (docs/design.md, "Anchor slices").
+    #: included where it wraps the exemplar (docs/design.md#anchor-slices).
     slice_layout = "staggered"
     insert_piece = 0
     seam_gap = 0

@@ -6,8 +6,7 @@ exemplar site on the P leading principal components of the level's (weighted) si
 the site nearest there is the voxel's match, and its distance is then taken on every term,
 as the exact search's is. A few components hold most of the variance of a texture's
 neighbourhoods, so the site found is the exact one or one nearly as near, and the matcher's
-time goes with the terms it sums: P instead of every term (docs/design.md, "Seeding on
-principal components"). Squared differences only (phase codes are names, not coordinates).
+time goes with the terms it sums: P instead of every term (docs/design.md#principal-components). Squared differences only (phase codes are names, not coordinates).
 """
 
 from __future__ import annotations
