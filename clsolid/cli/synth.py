@@ -148,7 +148,7 @@ class SynthCommand:
 SOURCES: tuple[tuple[str, type], ...] = (("command", SynthCommand), ("ml", MLParams),
                                          ("wl, kopf, chen-wang", SearchParams), ("backend", BackendOptions))
 #: What a checkpoint fixes: given with --resume, these are an error, not ignored.
-_RESUME_FIXED = ("exemplar", "shape", "method", "preset", "seed", "builtin_size", "track", "config")
+_RESUME_FIXED = ("exemplar", "shape", "method", "preset", "seed", "builtin_size", "track", "config", "checkpoint")
 
 
 class _HelpAll(argparse.Action):
@@ -211,7 +211,7 @@ class Settings:
     command: Any  # SynthCommand
     method_options: dict[str, Any]
     backend: dict[str, Any]
-    origin: dict[str, str]  # name -> how it was given ("--xi", "xi in cfg.toml", "preset ch5_compare")
+    origin: dict[str, str]  # name -> how it was given ("--xi", "xi (in cfg.toml)", "xi (preset ch5_compare)")
 
 
 def _said(name: str, origin: dict[str, str]) -> str:
@@ -260,7 +260,8 @@ def resolve(given: dict[str, Any]) -> Settings:
     cls = METHODS[method]
     unused = [_said(name, origin) for name in merged if not _reads(name, method)]
     if unused:
-        raise InputError(f"{', '.join(unused)} not used by --method {method}")
+        more = f" and {len(unused) - 6} more" if len(unused) > 6 else ""
+        raise InputError(f"{', '.join(unused[:6])}{more} not used by --method {method}")
     if merged.get("resume") is not None:
         fixed = [n for n in merged if n in _RESUME_FIXED or n in names(MLParams)]
         if fixed:

@@ -323,6 +323,7 @@ class _Flag:
 
     name: str
     spec: Option
+    default: Any  # the first declaring class's
     helps: list[tuple[str, str, str]]  # (who, help, default in words)
 
 
@@ -385,7 +386,7 @@ def add_arguments(parser: argparse.ArgumentParser, sources: Iterable[tuple[str, 
             words = (who, spec.help.rstrip("."), _default_words(f, spec))
             entry = flags.get(f.name)
             if entry is None:
-                flags[f.name] = _Flag(f.name, spec, [words])
+                flags[f.name] = _Flag(f.name, spec, f.default, [words])
             else:
                 if (entry.spec.check.parse, entry.spec.check.nargs) != (spec.check.parse, spec.check.nargs):
                     raise TypeError(f"option {f.name!r} is read differently by {owners[f.name]} and {who}")
@@ -399,7 +400,8 @@ def add_arguments(parser: argparse.ArgumentParser, sources: Iterable[tuple[str, 
         kwargs: dict[str, Any] = {"help": _help_text(entry.helps).replace("%", "%%") if shown else argparse.SUPPRESS}
         check = spec.check
         if isinstance(check, Flag):
-            kwargs["action"] = "store_true" if entry.helps[0][2] == "" else argparse.BooleanOptionalAction
+            # off by default: the flag alone; on, or decided later: --name and --no-name
+            kwargs["action"] = "store_true" if entry.default is False else argparse.BooleanOptionalAction
         else:
             if check.parse is not None:
                 kwargs["type"] = check.parse
