@@ -2,7 +2,7 @@
 
 An OpenCL driver can list a device that cannot build our kernels. PoCL on LLVM 14 lists
 a Zen 5 CPU, then fails every build ("unknown target CPU 'generic'"); on a Zen 4 CPU it
-builds a tiny kernel but aborts the whole process on the 16-wide vectors of ``kernels/ml/likelihood.cl``
+builds a tiny kernel but aborts the whole process on the 16-wide vectors of the ML kernels (``kernels/ml/``)
 ("LLVM ERROR: Cannot emit physreg copy instruction"). So the probe builds a tiny kernel
 and runs it (checking its result), then runs a tiny synthesis at the widest vector
 width that works (16, 8, then 4), each attempt in a child process that an abort cannot

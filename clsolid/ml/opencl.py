@@ -20,6 +20,8 @@ from .tiled import largest_tile
 
 _F4 = 4  # bytes per float32 / int32
 _INIT_RUN = 1 << 24  # most voxels the random start draws per launch
+#: The likelihood program's sources, built as one program in this order (each needs those before it).
+SOURCES = ("ml/common.cl", "ml/exact.cl", "ml/pruned.cl", "ml/relax.cl")
 
 
 def group_tables(model: ScaleModel, vw: int):
@@ -144,7 +146,7 @@ class CLBackend:
     def _kernels(self, model: ScaleModel, n_labels: int, projected: pruned.ProjectedWindows | None = None) -> dict:
         """The likelihood program for *model*; *projected*: the pruned sum's projected candidates, if any."""
         views, nr = model.offsets.shape[:2]
-        return programs.build(self.device, "ml/likelihood.cl", {
+        return programs.build(self.device, SOURCES, {
             "NR": nr, "NCHILD": nr - model.parent_rows,  # the rows after NCHILD: parent terms
             "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
             "NS": self.params.n_similar if self.params.likelihood == "pruned" else 1,
