@@ -1,30 +1,39 @@
-/* NP-MRF maximum-likelihood synthesis: the per-voxel work of one relaxation step, in four
+/* NP-MRF maximum-likelihood synthesis (Urs, Da Costa & Germain, IEEE TIP 2014, eqs. 3-11; R.-D.
+ * Urs's PhD thesis, Bordeaux 2013, §4.2-4.3): the per-voxel work of one relaxation step, in four
  * files built as one program in this order (clsolid.ml.opencl):
- *   common.cl  what the others share: layout, helpers, distance terms
+ *   common.cl  what the others share: layout, the scalar arguments, distance terms
  *   exact.cl   the Parzen sum over every exemplar site (parzen_groups)
  *   pruned.cl  the pruned Parzen sum over candidate windows (parzen_candidates and its helpers)
  *   relax.cl   the per-label LCPDF and the relaxation step (decide), state read-back
  *
- * Layout: volumes are (Z, Y, X), row-major; a voxel's flat index is (z * Y + y) * X + x.
- * Global id 0 enumerates work items (voxels or voxel-views of the current batch); the
- * host passes the batch's flat voxel indices, so sizes are kernel arguments and one
- * build serves every shape. Neighbours wrap around (toroidal, tileable output).
- * The buffers may hold one tile of a larger block (clsolid.ml.tiled), its halo included: the
- * kernels that draw random numbers or keep scores also take where the tile's first voxel
- * sits in the whole block (oz, oy, ox) and the block's shape (GZ, GY, GX), and use the
- * voxel's coordinates in the whole block (whole_coords), so a tiled run draws exactly what a
- * one-piece run does. One piece: origin 0, whole shape = (Z, Y, X).
+ * Layout: volumes are (Z, Y, X), row-major; voxel (z, y, x) of the block has the flat index
+ * (z * Y + y) * X + x. Neighbours wrap around (toroidal, tileable output). The buffers may hold
+ * one tile of a larger block (clsolid.ml.tiled), its halo included: the kernels that draw random
+ * numbers or keep scores use the voxel's coordinates in the whole block (whole_coords), so a
+ * tiled run draws exactly what a one-piece run does. One piece: origin 0, whole shape = (Z, Y, X).
+ *
+ * Global ids: only dimension 0 is used, and it is never a coordinate. The host passes a batch
+ * of flat voxel indices (voxels) and work item i takes entry i of the batch: voxel voxels[i]
+ * (prune_flags, decide, pack_state), or item i, the voxel-view pair voxels[i / n_views] seen in
+ * view i % n_views (parzen_groups takes VB items from i * VB; parzen_candidates and
+ * projected_nearest item item0 + i). A voxel's (z, y, x) come from its flat index. Global sizes
+ * are rounded up to the local size: a work item past the batch returns at once. So sizes are
+ * arguments, and one build serves every shape.
  *
  * Compile-time constants (-D):
- *   NR     neighbours per view (k*k - 1)
+ *   NR     terms per view (k*k - 1, plus 9 parent terms where the scale has them)
+ *   NCHILD the first NCHILD terms are the window's; the rest the parent's (default NR)
  *   VW     exemplar sites per vector (4, 8 or 16)
  *   VB     voxel-views per work item in parzen_groups, 1, 2, 4 or 8 (they share each load)
  *   NGMAX  largest number of centre-value groups (log_sums rows hold NGV*VW, -inf padded)
  *   NLMAX  largest number of labels
  *   NVIEW  number of constrained views (2 or 3)
  *   NS     windows per source in the pruned sum's candidate sets (clsolid.ml.pruned)
- *   MISMATCH  1: values differ by [a != b] instead of (a - b)^2, 2: by [a != b] (COST[a] + COST[b])
+ *   MISMATCH  0: values differ by (a - b)^2, 1: by [a != b], 2: by [a != b] (COST[a] + COST[b])
  *          (clsolid.ml.model.difference); COSTS then lists COST[label] (labels 0..L-1)
+ *   FALLOFF  where defined, FALLOFF_ROOT[r]^2 is term r's weight (fall-off, shared and parent
+ *          weights; clsolid.ml.model.term_weights); undefined, every term weighs 1
+ *   PROJ_K, PROJ_D, PROJ_P  the projected candidates (pruned.cl), where there are any
  */
 #define CAT_(a, b) a##b
 #define CAT(a, b) CAT_(a, b)
@@ -34,6 +43,43 @@ typedef CAT(int, VW) intv;
 #define NGV ((NGMAX + VW - 1) / VW)   /* group vectors */
 
 #include <pyopencl-random123/philox.cl>
+
+/* The scalar arguments of every kernel, one block per CLBackend, rewritten by the host when
+ * the scale, the block or the sweep changes; what changes from launch to launch (the range of
+ * the batch) is a plain argument. Fields are 4-byte int, uint or float only, so the layout has
+ * no padding and is the same on every device; clsolid.ml.opencl reads its NumPy twin from this
+ * definition: add a field here and the host has it. */
+/* A buffer, not a struct by value: struct kernel arguments follow each device's ABI (alignment, padding). */
+typedef struct {
+    /* the block the state buffers hold: the whole volume, or a tile with its halo */
+    int Z, Y, X;          /* its shape */
+    int n_vox;            /* Z * Y * X: the stride of a view in src */
+    int oz, oy, ox;       /* where its first voxel sits in the whole block (0 in one piece) */
+    int GZ, GY, GX;       /* the whole block's shape (Z, Y, X in one piece) */
+    /* the scale */
+    int n_views;          /* constrained views (NVIEW) */
+    int n_labels;         /* labels (at most NLV * VW) */
+    int n_groups;         /* centre-value groups of the exemplar sites (at most n_labels) */
+    int n_chunks;         /* vectors of VW sites in the exact sum's table */
+    int n_union;          /* offsets of the temperature update's neighbourhood */
+    float k;              /* 1 / (2 h^2), h the Parzen bandwidth */
+    float xi;             /* the temperature update's xi (< 0) */
+    int heuristic;        /* how the views combine (see decide) */
+    int relaxation;       /* 0 ICM, 1 Gibbs, 2 annealing */
+    int score_stride;     /* decide keeps the scores of every score_stride-th voxel of the whole block */
+    /* the pruned sum */
+    int grid_rows, grid_cols;   /* the exemplar's grid of window sites */
+    int n_sample;         /* sites sampled for the rest of the sum (0: none) */
+    int n_lists;          /* projected_nearest's lists of sites */
+    float min_weight;     /* prune_flags: least mean (1 - t)^2 over a view's neighbours */
+    int need_source;      /* prune_flags: 1 if a voxel without a source needs the exact sum */
+    /* the sweep */
+    uint key0, key1;      /* the Philox key */
+    uint tag;             /* decide's counter word 3 */
+    uint sample_tag;      /* the pruned sum's sample: its counter word 3 */
+    float t_in;           /* annealing's global temperature */
+    int n_projected;      /* projected candidates parzen_candidates reads: PROJ_K, or 0 in a sweep without */
+} ml_scalars;
 
 /* Far below any term that can matter: exp of it is 0 in float32. */
 #define NEGLIGIBLE (-87.0f)
@@ -122,12 +168,16 @@ inline uint4 whole_coords(int z, int y, int x, int oz, int oy, int ox, int GZ, i
     return (uint4)((x + ox) % GX, (y + oy) % GY, (z + oz) % GZ, 0u);
 }
 
-/* A neighbour's pair (xw, w) from its value x and weight wr = 1 - t: (wr x, wr) for squared
- * differences, (x, wr^2) for mismatches; ADD_TERM then adds wr^2 (x - p)^2 or wr^2 [x != p]
- * to acc, for the exemplar values p (of type T). */
-/* The fall-off (FALLOFF defined): neighbour r's weight 1 - t times FALLOFF_ROOT[r], the square
- * root of its Gaussian weight, so that its term weighs (1 - t)^2 times that weight. Undefined,
- * the weight is left as it is (not multiplied by 1, which could change how terms are fused). */
+/* The distance between a voxel's window and an exemplar site's, term by term (TIP 2014 eq. 9:
+ * each neighbour's difference times 1 - t, t its temperature).
+ * TERM_WEIGHT(wr, r): neighbour r's weight wr = 1 - t, times FALLOFF_ROOT[r], the square root of
+ * its term weight (FALLOFF defined), so that its term weighs (1 - t)^2 times that weight. Without
+ * term weights wr is left as it is, not multiplied by 1, so terms fuse as they always have.
+ * PAIR(x, wr, xw, w): the neighbour's pair (xw, w) from its value x: (wr x, wr) for squared
+ * differences, (x, wr^2) for mismatches; weighted mismatches (exemplar values arrive as their
+ * labels' costs, distinct) look the voxel's label x up in COST.
+ * ADD_TERM(T, acc, xw, w, p) then adds wr^2 (x - p)^2, wr^2 [x != p] or wr^2 [x != p] (cost
+ * of x + p) to acc, for the exemplar values p (of type T). */
 #ifdef FALLOFF
 __constant float FALLOFF_ROOT[] = {FALLOFF};
 #define TERM_WEIGHT(wr, r) ((wr) * FALLOFF_ROOT[r])
@@ -136,8 +186,6 @@ __constant float FALLOFF_ROOT[] = {FALLOFF};
 #endif
 
 #if MISMATCH == 2
-/* weighted: exemplar values arrive as their labels' costs (COSTS, distinct); a voxel's value,
- * a label 0..L-1, is looked up, and a mismatch costs the sum of the two */
 __constant float COST[] = {COSTS};
 #define PAIR(x, wr, xw, w) { xw = COST[(int)(x)]; w = (wr) * (wr); }
 #define ADD_TERM(T, acc, xw, w, p) { acc += select((T)(0.0f), (w) * ((T)(xw) + (p)), (p) != (T)(xw)); }

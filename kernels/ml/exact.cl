@@ -1,5 +1,5 @@
-/* The exact Parzen sum: every exemplar site's term, summed per centre-value group. Needs
- * common.cl before it. */
+/* The exact Parzen sum (TIP 2014 eqs. 4-7, thesis §4.2.2): every exemplar site's term, summed
+ * per centre-value group. Needs common.cl before it. */
 
 /* Fold a vector of distances into one group's running (minimum, rescaled sum). */
 inline void add_chunk(floatv a, float cmin, float k, float *gmin, float *gsum)
@@ -19,23 +19,27 @@ inline void add_chunk(floatv a, float cmin, float k, float *gmin, float *gsum)
  * (chunk_valid lanes are real); patches is laid out [chunk][r][VW]. Each group keeps a
  * running minimum of A and a sum rescaled to it (online log-sum-exp), so nothing
  * underflows whatever the window size or the number of grey levels.
- * Item i is voxel voxels[i / n_views] seen in view i % n_views.
  * src[view * n_vox + voxel] receives the voxel's source for the pruned likelihood: the site of
  * least A, as chunk_site[c * VW + lane] names each lane's (the lowest site with its neighbourhood).
  */
-__kernel void parzen_groups(__global const float *vol, __global const float *temp,
-                            int Z, int Y, int X,
-                            __global const int *voxels, int n_items, int n_views,
-                            __global const int *offsets,      /* [view][NR][3] */
-                            __global const float *patches,    /* [chunk][NR][VW] */
-                            __global const int *chunk_group,
-                            __global const int *chunk_valid,
-                            int n_chunks, int n_groups, float k,
+__kernel void parzen_groups(__constant const ml_scalars *P, int n_items,
+                            /* the state */
+                            __global const float *vol, __global const float *temp, __global int *src,
+                            /* the batch */
+                            __global const int *voxels,
                             __global float *log_sums,         /* [item][NGV * VW] */
-                            __global const int *chunk_site, __global int *src, int n_vox)
+                            /* the window terms (common.cl) */
+                            __global const int *offsets,      /* [view][NR][3] */
+                            /* the exemplar's sites */
+                            __global const float *patches,    /* [chunk][NR][VW] */
+                            __global const int *chunk_group, __global const int *chunk_valid,
+                            __global const int *chunk_site)   /* [chunk * VW + lane] */
 {
     int first = get_global_id(0) * VB;
     if (first >= n_items) return;
+    const int Z = P->Z, Y = P->Y, X = P->X, n_vox = P->n_vox, n_views = P->n_views;
+    const int n_chunks = P->n_chunks, n_groups = P->n_groups;
+    const float k = P->k;
 
     float xw[VB][NR], w[VB][NR];
     for (int b = 0; b < VB; ++b) {

@@ -31,27 +31,34 @@ inline int slot_of(const int *seen, int wnd)
  * weighted by their number, win_logc = log count); win_patches rows hold NRV float8 vectors,
  * zero-padded. The nearest candidate's win_source becomes the voxel's source in that view
  * (the lowest site with its neighbourhood). The rest of the sum is estimated from n_sample
- * sites, every (n_sites / n_sample)-th from a start drawn by Philox (counter (x, y, z, tag)
+ * sites, every (n_sites / n_sample)-th from a start drawn by Philox (counter (x, y, z, sample_tag)
  * with the voxel's whole-block coordinates, word view), each weighted n_sites / n_sample; a
  * sampled site of a candidate window is already counted and is skipped
  * (clsolid.ml.pruned.term_weights).
  */
-__kernel void parzen_candidates(__global const float *vol, __global const float *temp,
-                                int Z, int Y, int X, int oz, int oy, int ox, int GZ, int GY, int GX,
-                                __global const int *voxels, int item0, int n_items, int n_views,
-                                __global const int *offsets, __global const int *coh_off,
-                                __global const int *coh_shift, __global int *src, int n_vox,
+__kernel void parzen_candidates(__constant const ml_scalars *P, int item0, int n_items,
+                                /* the state */
+                                __global const float *vol, __global const float *temp, __global int *src,
+                                /* the batch */
+                                __global const int *voxels, __global float *log_sums,
+                                /* the window terms (common.cl) */
+                                __global const int *offsets,
+                                /* the coherence: in-slice neighbours [view][9][3], exemplar shifts [view][9][2] */
+                                __global const int *coh_off, __global const int *coh_shift,
+                                /* the exemplar's distinct windows */
                                 __global const int *window_of, __global const int *similar,
                                 __global const float *win_patches,   /* [window][NRV * 8] */
                                 __global const int *win_group, __global const float *win_logc,
-                                __global const int *win_source, int grid_rows, int grid_cols,
-                                __global const int *projected,   /* [item - item0][PROJ_K] windows, -1: none */
-                                int n_projected,   /* of them to read: PROJ_K, or 0 in a sweep without */
-                                int n_sample, uint key0, uint key1, uint tag,
-                                int n_groups, float k, __global float *log_sums)
+                                __global const int *win_source,
+                                /* [item - item0][PROJ_K] windows, -1: none (projected_nearest) */
+                                __global const int *projected)
 {
     int item = item0 + get_global_id(0);
     if (item >= n_items) return;
+    const int Z = P->Z, Y = P->Y, X = P->X, n_vox = P->n_vox, n_views = P->n_views;
+    const int grid_rows = P->grid_rows, grid_cols = P->grid_cols, n_groups = P->n_groups;
+    const int n_sample = P->n_sample, n_projected = P->n_projected;
+    const float k = P->k;
     int voxel = voxels[item / n_views], view = item % n_views;
     int z = voxel / (Y * X), rem = voxel - z * Y * X;
     int y = rem / X, x = rem - y * X;
@@ -107,9 +114,9 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
     int best_w = 0;
     int n_sites = grid_rows * grid_cols, start = 0;
     if (n_sample) {
-        uint4 g = whole_coords(z, y, x, oz, oy, ox, GZ, GY, GX);
-        philox4x32_ctr_t ctr = {{g.x, g.y, g.z, tag}};
-        philox4x32_key_t key = {{key0, key1}};
+        uint4 g = whole_coords(z, y, x, P->oz, P->oy, P->ox, P->GZ, P->GY, P->GX);
+        philox4x32_ctr_t ctr = {{g.x, g.y, g.z, P->sample_tag}};
+        philox4x32_key_t key = {{P->key0, P->key1}};
         start = mul_hi(philox4x32(ctr, key).v[view], (uint)n_sites);
     }
     float log_rest = log((float)n_sites / (float)n_sample);
@@ -162,6 +169,8 @@ __kernel void parzen_candidates(__global const float *vol, __global const float 
         out[j] = select((floatv)(-INFINITY), gmaxv[j] + log(gsumv[j]), isgreater(gsumv[j], (floatv)(0.0f)));
 }
 
+/* The projected candidates (clsolid.ml.pruned.ProjectedWindows), compiled where there are any:
+ * PROJ_K windows an item takes, PROJ_D principal axes, PROJ_P lists of sites searched. */
 #if PROJ_K > 0
 #define PDV ((PROJ_D + 7) / 8)
 /* Whether (a, s) comes before (b, t): the nearer, the lower index on a tie. */
@@ -198,22 +207,25 @@ inline float proj_distance(const float8 *q, __global const float8 *p)
  * (clsolid.ml.pruned.ProjectedWindows): the window, each term times proj_scale (the fall-off's
  * square root; the temperatures left out), less proj_mean, times proj_axes [NR][PROJ_D]; its
  * squared distance to the projections of the sites it searches: those of the PROJ_P lists
- * (of n_lists, centres proj_centres [list][PROJ_D]) whose centres are nearest, the lower list
- * on a tie; list l holds the sites list_site [list_start[l] .. list_start[l + 1]), their
- * projections in the same order in proj_sites [i][PROJ_D] (float8 rows of PDV, zero-padded).
+ * (of n_lists; centres proj_centres [list][PROJ_D]) whose centres are nearest, the lower list on a tie; list l holds the sites
+ * list_site [list_start[l] .. list_start[l + 1]), their projections in the same order in
+ * proj_sites [i][PROJ_D] (float8 rows of PDV, zero-padded).
  * The PROJ_K least kept, nearest first, the lower site first on a tie. Writes their windows
  * (window_of), -1 past the sites searched, to projected [item - item0][PROJ_K]. */
-__kernel void projected_nearest(__global const float *vol, int Z, int Y, int X,
-                                __global const int *voxels, int item0, int n_items, int n_views,
-                                __global const int *offsets, __global const float *proj_scale,
-                                __global const float *proj_mean, __global const float8 *proj_axes,
-                                __global const float8 *proj_centres, int n_lists,
-                                __global const int *list_start, __global const int *list_site,
-                                __global const float8 *proj_sites, __global const int *window_of,
-                                __global int *projected)
+__kernel void projected_nearest(__constant const ml_scalars *P, int item0, int n_items,
+                                __global const float *vol, __global const int *voxels, __global const int *offsets,
+                                /* the projection: per term [NR], axes [NR][PDV] */
+                                __global const float *proj_scale, __global const float *proj_mean,
+                                __global const float8 *proj_axes,
+                                /* the lists of sites: centres [list][PDV], sites by list, their projections [i][PDV] */
+                                __global const float8 *proj_centres, __global const int *list_start,
+                                __global const int *list_site, __global const float8 *proj_sites,
+                                __global const int *window_of,
+                                __global int *projected)   /* [item - item0][PROJ_K] */
 {
     int item = item0 + get_global_id(0);
     if (item >= n_items) return;
+    const int Z = P->Z, Y = P->Y, X = P->X, n_views = P->n_views, n_lists = P->n_lists;
     int voxel = voxels[item / n_views], view = item % n_views;
     int z = voxel / (Y * X), rem = voxel - z * Y * X;
     int y = rem / X, x = rem - y * X;
@@ -248,13 +260,15 @@ __kernel void projected_nearest(__global const float *vol, int Z, int Y, int X,
 
 /* flags[i] = 1 where voxel voxels[i] needs the exact sum (clsolid.ml.pruned.needs_exact): some
  * view's mean (1 - t)^2 over its neighbours below min_weight, or (need_source) no source yet. */
-__kernel void prune_flags(__global const float *temp, int Z, int Y, int X,
-                          __global const int *voxels, int n_voxels, int n_views,
-                          __global const int *offsets, __global const int *src, int n_vox,
-                          float min_weight, int need_source, __global int *flags)
+__kernel void prune_flags(__constant const ml_scalars *P, int n_voxels,
+                          __global const float *temp, __global const int *src, __global const int *voxels,
+                          __global const int *offsets, __global int *flags)
 {
     int i = get_global_id(0);
     if (i >= n_voxels) return;
+    const int Z = P->Z, Y = P->Y, X = P->X, n_vox = P->n_vox, n_views = P->n_views;
+    const int need_source = P->need_source;
+    const float min_weight = P->min_weight;
     int voxel = voxels[i], flag = 0;
     int z = voxel / (Y * X), rem = voxel - z * Y * X;
     int y = rem / X, x = rem - y * X;

@@ -1,6 +1,6 @@
-/* The relaxation step: each voxel's per-label LCPDF from its views' group sums, the views
- * combined, a label chosen, the temperature updated; and the state read back. Needs common.cl
- * before it. */
+/* The relaxation step (TIP 2014 eqs. 3, 8, 10-11 and Fig. 1; thesis §4.2.3-4.3.4): each voxel's
+ * per-label LCPDF from its views' group sums, the views combined, a label chosen, the
+ * temperature updated; and the state read back. Needs common.cl before it. */
 
 inline float vmax_all(const floatv *v, int n)
 {
@@ -53,7 +53,7 @@ inline void view_logf(__global const float *ls, int n_groups, __global const flo
     }
     float *fs = (float *)f;
     for (int l = n_labels; l < NLV * VW; ++l) fs[l] = -INFINITY;
-    /* normalise over the labels (eq. 4.4) */
+    /* normalise over the labels (TIP 2014 eq. 3, thesis eq. 4.4) */
     float mx = vmax_all(f, NLV);
     floatv acc = (floatv)(0.0f);
     for (int j = 0; j < NLV; ++j) acc += exp(f[j] - (floatv)(mx));
@@ -90,7 +90,7 @@ inline int draw_label(const floatv *score, int n, float r)
     return last;   /* r * total rounded up to total */
 }
 
-/* Annealing (TIP14 Fig. 1): accept a proposal of log score s_new against the current
+/* Annealing (TIP 2014 Fig. 1): accept a proposal of log score s_new against the current
  * label's s_cur if p = exp(s_new - s_cur) > 1 or p * t_in > q. Scores within the tie
  * tolerance are equal (p = 1): exact ties are common, as in first_best. */
 inline bool accept(float s_new, float s_cur, float t_in, float q)
@@ -128,18 +128,22 @@ inline int nearest_label(__global const float *labels, int n, float x)
  * a multiple of score_stride, the combined log score before the bias (h1: the sum of the
  * views' log LCPDFs).
  */
-__kernel void decide(__global float *vol, __global float *temp, int Z, int Y, int X,
-                     int oz, int oy, int ox, int GZ, int GY, int GX,
-                     __global const int *voxels, int n_voxels, int n_views,
-                     __global const float *log_sums, int n_groups, __global const float *kern,
-                     __global const float *labels, int n_labels,
-                     __global const int *union_offsets, int n_union, float xi,
-                     int heuristic, int relaxation, __global const float *bias,
-                     uint key0, uint key1, uint tag, float t_in,
-                     __global float *scores, int score_stride)
+__kernel void decide(__constant const ml_scalars *P, int n_voxels,
+                     __global float *vol, __global float *temp,   /* the state */
+                     __global const int *voxels,
+                     __global const float *log_sums,   /* [i * n_views + view][NGV * VW], parzen_* */
+                     __global const float *kern,       /* [2][n_groups][NLV * VW], see view_logf */
+                     __global const float *labels,     /* [n_labels] */
+                     __global const int *union_offsets,   /* [n_union][3] */
+                     __global const float *bias,       /* [NLV * VW] */
+                     __global float *scores)           /* [voxel / score_stride][n_labels] */
 {
     int i = get_global_id(0);
     if (i >= n_voxels) return;
+    const int Z = P->Z, Y = P->Y, X = P->X, GY = P->GY, GX = P->GX, n_views = P->n_views;
+    const int n_groups = P->n_groups, n_labels = P->n_labels, n_union = P->n_union;
+    const int heuristic = P->heuristic, relaxation = P->relaxation, score_stride = P->score_stride;
+    const float xi = P->xi, t_in = P->t_in;
     int voxel = voxels[i];
 
     floatv fv[NVIEW][NLV];
@@ -148,13 +152,13 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
 
     int z = voxel / (Y * X), rem = voxel - z * Y * X;
     int y = rem / X, x = rem - y * X;
-    uint4 g = whole_coords(z, y, x, oz, oy, ox, GZ, GY, GX);
+    uint4 g = whole_coords(z, y, x, P->oz, P->oy, P->ox, P->GZ, GY, GX);
     uint u[4] = {0u, 0u, 0u, 0u};
     float x_s = vol[voxel];
     int cur = 0, prop = 0;
     if (relaxation) {
-        philox4x32_ctr_t c = {{g.x, g.y, g.z, tag}};
-        philox4x32_key_t key = {{key0, key1}};
+        philox4x32_ctr_t c = {{g.x, g.y, g.z, P->tag}};
+        philox4x32_key_t key = {{P->key0, P->key1}};
         philox4x32_ctr_t r = philox4x32(c, key);
         for (int j = 0; j < 4; ++j) u[j] = r.v[j];
         if (relaxation == 2) {
@@ -237,12 +241,13 @@ __kernel void decide(__global float *vol, __global float *temp, int Z, int Y, in
 
 /* The state of voxels[0..n) of the buffers, packed to be read back (a tile gives back only the
  * voxels it updated): values[i] = vol, values[n + i] = temp, sources[view * n + i] = src. */
-__kernel void pack_state(__global const float *vol, __global const float *temp, __global const int *src,
-                         int n_vox, int n_views, __global const int *voxels, int n,
-                         __global float *values, __global int *sources)
+__kernel void pack_state(__constant const ml_scalars *P, int n,
+                         __global const float *vol, __global const float *temp, __global const int *src,
+                         __global const int *voxels, __global float *values, __global int *sources)
 {
     int i = get_global_id(0);
     if (i >= n) return;
+    const int n_vox = P->n_vox, n_views = P->n_views;
     int voxel = voxels[i];
     values[i] = vol[voxel];
     values[n + i] = temp[voxel];
@@ -251,13 +256,14 @@ __kernel void pack_state(__global const float *vol, __global const float *temp, 
 
 /* The normalised per-label log LCPDF of each voxel-view (for tests and diagnostics):
  * out[item][label], with the same code path as decide. */
-__kernel void lcpdf(__global const float *log_sums, int n_items, int n_groups, __global const float *kern,
-                    int n_labels, __global float *out)
+__kernel void lcpdf(__constant const ml_scalars *P, int n_items, __global const float *log_sums,
+                    __global const float *kern, __global float *out)
 {
     int i = get_global_id(0);
     if (i >= n_items) return;
     floatv f[NLV];
-    view_logf(log_sums + (size_t)i * NGV * VW, n_groups, kern, n_labels, f);
+    const int n_labels = P->n_labels;
+    view_logf(log_sums + (size_t)i * NGV * VW, P->n_groups, kern, n_labels, f);
     const float *fs = (const float *)f;
     for (int l = 0; l < n_labels; ++l) out[(size_t)i * n_labels + l] = fs[l];
 }
