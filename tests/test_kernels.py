@@ -231,3 +231,17 @@ def test_scalar_block_has_the_kernels_layout(device):
     np.testing.assert_array_equal(out[:-1], record.view(np.int32))
     assert out[-1] == dtype.itemsize
 
+
+def test_a_second_exemplar_builds_nothing(device):
+    """The exemplar's tables (label costs, term weights) are buffers, not compiled in: a second
+    exemplar with the same options reuses the first's programs, and each still gets its own
+    volume (the tables are not left over from the other)."""
+    kw = dict(neighborhood=5, scales=1, distance="weighted", rng=3, device=device)
+    three, four = (gallery_exemplar(name, 64)[:32, :32] for name in ("composite3", "composite4"))
+    first = clsolid.synthesize(three, (8, 8, 8), **kw)
+    built = len(device.programs)
+    other = clsolid.synthesize(four, (8, 8, 8), **kw)
+    again = clsolid.synthesize(three, (8, 8, 8), **kw)
+    assert len(device.programs) == built
+    np.testing.assert_array_equal(again, first)
+    assert set(np.unique(other)) == set(np.unique(four)) and set(np.unique(first)) == set(np.unique(three))

@@ -49,6 +49,9 @@ def build(device: Device, name: str | tuple[str, ...], defines: dict[str, int | 
     names: one program of their sources in that order (a file that uses another's functions
     after it).
 
+    *defines* are for what changes the code (vector widths, array sizes, which terms exist);
+    sizes and per-input tables go in kernel arguments, or every new input would be a new build.
+
     Programs are cached on the Device by (source, options) and every kernel object is
     retrieved once, so repeated calls are free.
     """

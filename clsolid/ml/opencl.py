@@ -67,11 +67,6 @@ def group_tables(model: ScaleModel, vw: int):
     return patches, chunk_group, chunk_valid.astype(np.int32), values.astype(np.float32), chunk_site
 
 
-def _float_literals(values: np.ndarray) -> str:
-    """*values* as a comma-separated list of exact float32 hex literals, for a ``__constant`` array."""
-    return ",".join(f"{float(v).hex()}f" for v in np.asarray(values, np.float32))
-
-
 class CLBackend:
     """Runs the per-voxel work of :func:`clsolid.ml.driver.run_ml` on an OpenCL device.
 
@@ -161,17 +156,22 @@ class CLBackend:
 
     # -- kernels -----------------------------------------------------------------------
     def _kernels(self, model: ScaleModel, n_labels: int, projected: pruned.ProjectedWindows | None = None) -> dict:
-        """The likelihood program for *model*; *projected*: the pruned sum's projected candidates, if any."""
+        """The likelihood program for *model*; *projected*: the pruned sum's projected candidates, if any.
+
+        Only what changes the code is compiled in (array sizes, which terms exist); the exemplar's
+        tables and every size are arguments, so one build serves every exemplar of the same options."""
         views, nr = model.offsets.shape[:2]
+        p = self.params
         return programs.build(self.device, SOURCES, {
             "NR": nr, "NCHILD": nr - model.parent_rows,  # the rows after NCHILD: parent terms
-            "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
-            "NS": self.params.n_similar if self.params.likelihood == "pruned" else 1,
-            **({"PROJ_K": self.params.prune_projected_k, "PROJ_D": projected.axes.shape[1], "PROJ_P": projected.probe}
-               if projected is not None else {}),
+            "VW": self.vw, "VB": self.vb, "NLV": -(-n_labels // self.vw), "NVIEW": views,
+            "NS": p.n_similar if p.likelihood == "pruned" else 1,
+            # PROJ_P: the option, not projected.probe (which a small exemplar's fewer lists clamp):
+            # the kernel stops at the last list there is
+            **({"PROJ_K": p.prune_projected_k, "PROJ_D": projected.axes.shape[1],
+                "PROJ_P": max(p.prune_projected_probe, 1)} if projected is not None else {}),
             "MISMATCH": 2 if model.costs is not None else int(model.mismatch),
-            **({"COSTS": _float_literals(model.costs)} if model.costs is not None else {}),
-            **({"FALLOFF": _float_literals(np.sqrt(model.term_weight))} if model.term_weight is not None else {}),
+            "TERM_WEIGHTS": int(model.term_weight is not None),
         })
 
     def _set_scalars(self, **fields) -> None:
@@ -274,6 +274,11 @@ class CLBackend:
         self.kern = self._buf(kernel_tables(model, gvals, self._pad(n_labels)))
         self.labels = self._buf(model.labels.astype(np.float32))
         self.offsets = self._buf(model.offsets.astype(np.int32))
+        # The window terms: offsets, each term's weight's square root and each label's cost (a
+        # placeholder where the model has none), in buffers so that one build serves every exemplar.
+        roots = np.ones(1) if model.term_weight is None else np.sqrt(model.term_weight)
+        costs = np.zeros(1) if model.costs is None else model.costs
+        self.terms = (self.offsets, self._buf(roots.astype(np.float32)), self._buf(costs.astype(np.float32)))
         self.union = self._buf(model.union_offsets.astype(np.int32))
         self.vox_buf = cl.Buffer(ctx, mf.READ_ONLY, batch * _F4)
         self.packed = (cl.Buffer(ctx, mf.WRITE_ONLY, 2 * batch * _F4),
@@ -385,7 +390,7 @@ class CLBackend:
         if n_exact:
             self.k["parzen_groups"](q, (self._global(-(-n_exact * views // self.vb)),), (self.local,),
                                     self.scalars_buf, np.int32(n_exact * views), *self.state, self.vox_buf,
-                                    self.sums, self.offsets, *self.exemplar)
+                                    self.sums, *self.terms, *self.exemplar)
         if self.params.likelihood == "pruned":
             self.exact_visits += n_exact
             self.pruned_visits += voxels.size - n_exact
@@ -401,7 +406,7 @@ class CLBackend:
                 q.finish()
                 self.search_seconds += time.perf_counter() - t0
             self.k["parzen_candidates"](q, items, (self.item_local,), self.scalars_buf, *item_range,
-                                        *self.state, self.vox_buf, self.sums, self.offsets, *self.coherence,
+                                        *self.state, self.vox_buf, self.sums, *self.terms, *self.coherence,
                                         *self.windows, self.projected_out)
         return n_items
 

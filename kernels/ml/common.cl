@@ -20,27 +20,26 @@
  * are rounded up to the local size: a work item past the batch returns at once. So sizes are
  * arguments, and one build serves every shape.
  *
- * Compile-time constants (-D):
+ * Compile-time constants (-D), only those that change the code (array sizes, loop bounds,
+ * which terms are computed); everything else is an argument:
  *   NR     terms per view (k*k - 1, plus 9 parent terms where the scale has them)
  *   NCHILD the first NCHILD terms are the window's; the rest the parent's (default NR)
  *   VW     exemplar sites per vector (4, 8 or 16)
  *   VB     voxel-views per work item in parzen_groups, 1, 2, 4 or 8 (they share each load)
- *   NGMAX  largest number of centre-value groups (log_sums rows hold NGV*VW, -inf padded)
- *   NLMAX  largest number of labels
+ *   NLV    vectors of labels: labels and centre-value groups are held in NLV * VW lanes
  *   NVIEW  number of constrained views (2 or 3)
  *   NS     windows per source in the pruned sum's candidate sets (clsolid.ml.pruned)
- *   MISMATCH  0: values differ by (a - b)^2, 1: by [a != b], 2: by [a != b] (COST[a] + COST[b])
- *          (clsolid.ml.model.difference); COSTS then lists COST[label] (labels 0..L-1)
- *   FALLOFF  where defined, FALLOFF_ROOT[r]^2 is term r's weight (fall-off, shared and parent
- *          weights; clsolid.ml.model.term_weights); undefined, every term weighs 1
+ *   MISMATCH  0: values differ by (a - b)^2, 1: by [a != b], 2: by [a != b] (cost[a] + cost[b])
+ *          (clsolid.ml.model.difference), the costs per label in the label_cost buffer
+ *   TERM_WEIGHTS  1: term r of a window weighs term_root[r]^2 (fall-off, shared and parent
+ *          weights; clsolid.ml.model.term_weights), 0: every term weighs 1
  *   PROJ_K, PROJ_D, PROJ_P  the projected candidates (pruned.cl), where there are any
  */
 #define CAT_(a, b) a##b
 #define CAT(a, b) CAT_(a, b)
 typedef CAT(float, VW) floatv;
 typedef CAT(int, VW) intv;
-#define NLV ((NLMAX + VW - 1) / VW)   /* label vectors */
-#define NGV ((NGMAX + VW - 1) / VW)   /* group vectors */
+#define NGV NLV   /* vectors of centre-value groups: a group is a label */
 
 #include <pyopencl-random123/philox.cl>
 
@@ -170,29 +169,27 @@ inline uint4 whole_coords(int z, int y, int x, int oz, int oy, int ox, int GZ, i
 
 /* The distance between a voxel's window and an exemplar site's, term by term (TIP 2014 eq. 9:
  * each neighbour's difference times 1 - t, t its temperature).
- * TERM_WEIGHT(wr, r): neighbour r's weight wr = 1 - t, times FALLOFF_ROOT[r], the square root of
- * its term weight (FALLOFF defined), so that its term weighs (1 - t)^2 times that weight. Without
+ * TERM_WEIGHT(root, wr, r): neighbour r's weight wr = 1 - t, times root[r], the square root of
+ * its term weight (TERM_WEIGHTS), so that its term weighs (1 - t)^2 times that weight. Without
  * term weights wr is left as it is, not multiplied by 1, so terms fuse as they always have.
- * PAIR(x, wr, xw, w): the neighbour's pair (xw, w) from its value x: (wr x, wr) for squared
+ * PAIR(cost, x, wr, xw, w): the neighbour's pair (xw, w) from its value x: (wr x, wr) for squared
  * differences, (x, wr^2) for mismatches; weighted mismatches (exemplar values arrive as their
- * labels' costs, distinct) look the voxel's label x up in COST.
+ * labels' costs, distinct) look the voxel's label x up in cost.
  * ADD_TERM(T, acc, xw, w, p) then adds wr^2 (x - p)^2, wr^2 [x != p] or wr^2 [x != p] (cost
  * of x + p) to acc, for the exemplar values p (of type T). */
-#ifdef FALLOFF
-__constant float FALLOFF_ROOT[] = {FALLOFF};
-#define TERM_WEIGHT(wr, r) ((wr) * FALLOFF_ROOT[r])
+#if TERM_WEIGHTS
+#define TERM_WEIGHT(root, wr, r) ((wr) * (root)[r])
 #else
-#define TERM_WEIGHT(wr, r) (wr)
+#define TERM_WEIGHT(root, wr, r) (wr)
 #endif
 
 #if MISMATCH == 2
-__constant float COST[] = {COSTS};
-#define PAIR(x, wr, xw, w) { xw = COST[(int)(x)]; w = (wr) * (wr); }
+#define PAIR(cost, x, wr, xw, w) { xw = (cost)[(int)(x)]; w = (wr) * (wr); }
 #define ADD_TERM(T, acc, xw, w, p) { acc += select((T)(0.0f), (w) * ((T)(xw) + (p)), (p) != (T)(xw)); }
 #elif MISMATCH
-#define PAIR(x, wr, xw, w) { xw = (x); w = (wr) * (wr); }
+#define PAIR(cost, x, wr, xw, w) { xw = (x); w = (wr) * (wr); }
 #define ADD_TERM(T, acc, xw, w, p) { acc += select((T)(0.0f), (T)(w), (p) != (T)(xw)); }
 #else
-#define PAIR(x, wr, xw, w) { xw = (wr) * (x); w = (wr); }
+#define PAIR(cost, x, wr, xw, w) { xw = (wr) * (x); w = (wr); }
 #define ADD_TERM(T, acc, xw, w, p) { T d_ = (xw) - (w) * (p); acc += d_ * d_; }
 #endif

@@ -30,6 +30,7 @@ __kernel void parzen_groups(__constant const ml_scalars *P, int n_items,
                             __global float *log_sums,         /* [item][NGV * VW] */
                             /* the window terms (common.cl) */
                             __global const int *offsets,      /* [view][NR][3] */
+                            __constant const float *term_root, __global const float *label_cost,
                             /* the exemplar's sites */
                             __global const float *patches,    /* [chunk][NR][VW] */
                             __global const int *chunk_group, __global const int *chunk_valid,
@@ -48,11 +49,11 @@ __kernel void parzen_groups(__constant const ml_scalars *P, int n_items,
         __global const int *off = offsets + (item % n_views) * NR * 3;
         for (int r = 0; r < NR; ++r) {
             int j = neighbour(voxel, Y, X, Z, off + 3 * r) + PARENT(r, Z, Y, X);
-            PAIR(vol[j], TERM_WEIGHT(1.0f - temp[j], r), xw[b][r], w[b][r])
+            PAIR(label_cost, vol[j], TERM_WEIGHT(term_root, 1.0f - temp[j], r), xw[b][r], w[b][r])
         }
     }
 
-    float gmin[VB][NGMAX], gsum[VB][NGMAX], best[VB];
+    float gmin[VB][NGV * VW], gsum[VB][NGV * VW], best[VB];
     int best_chunk[VB];
     for (int b = 0; b < VB; ++b) {
         best[b] = INFINITY;

@@ -43,6 +43,7 @@ __kernel void parzen_candidates(__constant const ml_scalars *P, int item0, int n
                                 __global const int *voxels, __global float *log_sums,
                                 /* the window terms (common.cl) */
                                 __global const int *offsets,
+                                __constant const float *term_root, __global const float *label_cost,
                                 /* the coherence: in-slice neighbours [view][9][3], exemplar shifts [view][9][2] */
                                 __global const int *coh_off, __global const int *coh_shift,
                                 /* the exemplar's distinct windows */
@@ -102,7 +103,7 @@ __kernel void parzen_candidates(__constant const ml_scalars *P, int item0, int n
     __global const int *off = offsets + view * NR * 3;
     for (int r = 0; r < NR; ++r) {
         int j = shifted(z, y, x, Z, Y, X, off + 3 * r) + PARENT(r, Z, Y, X);
-        PAIR(vol[j], TERM_WEIGHT(1.0f - temp[j], r), xws[r], ws[r])
+        PAIR(label_cost, vol[j], TERM_WEIGHT(term_root, 1.0f - temp[j], r), xws[r], ws[r])
     }
     floatv gmaxv[NGV], gsumv[NGV];   /* a group at a time below, a vector at a time at the end */
     for (int j = 0; j < NGV; ++j) {
@@ -207,7 +208,8 @@ inline float proj_distance(const float8 *q, __global const float8 *p)
  * (clsolid.ml.pruned.ProjectedWindows): the window, each term times proj_scale (the fall-off's
  * square root; the temperatures left out), less proj_mean, times proj_axes [NR][PROJ_D]; its
  * squared distance to the projections of the sites it searches: those of the PROJ_P lists
- * (of n_lists; centres proj_centres [list][PROJ_D]) whose centres are nearest, the lower list on a tie; list l holds the sites
+ * (of n_lists, all of them where there are fewer; centres proj_centres [list][PROJ_D]) whose
+ * centres are nearest, the lower list on a tie; list l holds the sites
  * list_site [list_start[l] .. list_start[l + 1]), their projections in the same order in
  * proj_sites [i][PROJ_D] (float8 rows of PDV, zero-padded).
  * The PROJ_K least kept, nearest first, the lower site first on a tie. Writes their windows

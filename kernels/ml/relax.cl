@@ -28,7 +28,7 @@ inline void view_logf(__global const float *ls, int n_groups, __global const flo
     for (int j = 0; j < NGV; ++j) e[j] = exp(e[j] - (floatv)(M));
     const float *es = (const float *)e;
     /* the groups with terms: an empty one (-inf; most, in a pruned sum) adds exactly nothing */
-    int near[NGMAX], n_near = 0;
+    int near[NGV * VW], n_near = 0;
     for (int g = 0; g < n_groups; ++g)
         if (ls[g] > -INFINITY) near[n_near++] = g;
     for (int j = 0; j < NLV; ++j) f[j] = (floatv)(0.0f);
