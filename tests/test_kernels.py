@@ -201,3 +201,47 @@ def test_one_icm_step_matches_reference(device, small_labels, heuristic, distanc
     np.testing.assert_allclose(cl_b.temperature(), ref.temperature(), atol=1e-6)
     untouched = np.setdiff1d(np.arange(vol.size), voxels)
     np.testing.assert_array_equal(cl_b.volume().ravel()[untouched], vol.ravel()[untouched])
+
+
+def test_scalar_block_has_the_kernels_layout(device):
+    """The host's ml_scalars (read from kernels/ml/common.cl) lands field for field where the
+    kernels read it: each field written distinct and echoed back by a kernel."""
+    import pyopencl as cl
+
+    from clsolid.core import programs
+    from clsolid.ml.opencl import scalar_dtype
+
+    dtype = scalar_dtype()
+    assert dtype.itemsize == 4 * len(dtype.names)  # 4-byte fields, no padding
+    echo = "\n".join(f"    out[{i}] = as_int(P->{name});" for i, name in enumerate(dtype.names))
+    source = programs.read_source("ml/common.cl") + (
+        "\n__kernel void echo(__constant const ml_scalars *P, __global int *out)\n{\n"
+        f"{echo}\n    out[{len(dtype.names)}] = sizeof(ml_scalars);\n}}\n")
+    defines = ["-DVW=4", "-DNR=8", "-DNLV=1", "-DMISMATCH=0", "-DTERM_WEIGHTS=0"]
+    kernel = cl.Program(device.context, source).build(options=programs.include_options() + defines).echo
+    record = np.zeros(1, dtype)
+    for i, name in enumerate(dtype.names):
+        record[name] = i + 1.5 if dtype[name] == np.float32 else i + 1
+    mf = cl.mem_flags
+    scalars = cl.Buffer(device.context, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=record)
+    out = np.empty(len(dtype.names) + 1, np.int32)
+    out_buf = cl.Buffer(device.context, mf.WRITE_ONLY, out.nbytes)
+    kernel(device.queue, (1,), None, scalars, out_buf)
+    cl.enqueue_copy(device.queue, out, out_buf)
+    np.testing.assert_array_equal(out[:-1], record.view(np.int32))
+    assert out[-1] == dtype.itemsize
+
+
+def test_a_second_exemplar_builds_nothing(device):
+    """The exemplar's tables (label costs, term weights) are buffers, not compiled in: a second
+    exemplar with the same options reuses the first's programs, and each still gets its own
+    volume (the tables are not left over from the other)."""
+    kw = dict(neighborhood=5, scales=1, distance="weighted", rng=3, device=device)
+    three, four = (gallery_exemplar(name, 64)[:32, :32] for name in ("composite3", "composite4"))
+    first = clsolid.synthesize(three, (8, 8, 8), **kw)
+    built = len(device.programs)
+    other = clsolid.synthesize(four, (8, 8, 8), **kw)
+    again = clsolid.synthesize(three, (8, 8, 8), **kw)
+    assert len(device.programs) == built
+    np.testing.assert_array_equal(again, first)
+    assert set(np.unique(other)) == set(np.unique(four)) and set(np.unique(first)) == set(np.unique(three))

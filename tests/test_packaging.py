@@ -7,13 +7,15 @@ from pathlib import Path
 
 import clsolid
 from clsolid.core import programs
+from clsolid.ml.opencl import SOURCES
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_kernel_loader_finds_the_sources():
-    assert (programs.kernel_dir() / "ml" / "likelihood.cl").is_file()
-    assert programs.read_source("ml/likelihood.cl").startswith('#line 1 "kernels/ml/likelihood.cl"')
+    for name in SOURCES:
+        assert (programs.kernel_dir() / name).is_file()
+        assert programs.read_source(name).startswith(f'#line 1 "kernels/{name}"')
 
 
 def test_wheel_contains_the_kernels(tmp_path):
@@ -21,7 +23,7 @@ def test_wheel_contains_the_kernels(tmp_path):
                     "-w", str(tmp_path), str(ROOT)], check=True)
     wheel = next(tmp_path.glob("clsolid-*.whl"))
     names = zipfile.ZipFile(wheel).namelist()
-    assert {"clsolid/kernels/ml/likelihood.cl", "clsolid/kernels/core/init.cl",
+    assert {*(f"clsolid/kernels/{name}" for name in SOURCES), "clsolid/kernels/core/init.cl",
             "clsolid/kernels/search/match.cl", "clsolid/kernels/search/gather.cl", "clsolid/search/match.py",
             "clsolid/search/block.py"} <= set(names)
     packages = {str(d.relative_to(ROOT)) for d in (ROOT / "clsolid").rglob("__init__.py")}

@@ -11,6 +11,17 @@ def test_bench_ml_runs_with_tuning(capsys, device, tool):
     assert "x ICM" in out and "sweeps" in out
 
 
+def test_bench_ml_builds_the_program_once_for_two_exemplars(capsys, device, monkeypatch, tool):
+    import os
+
+    monkeypatch.setenv("POCL_CACHE_DIR", os.environ["POCL_CACHE_DIR"])  # put back after the tool sets its own
+    tool("bench_ml").main(["--builds", "composite3", "composite4", "--device", device.device.name.strip()[:8]])
+    out = capsys.readouterr().out
+    rows = [line.split() for line in out.splitlines() if line.startswith("  composite")]
+    assert "GFLOP/s" in out and [row[0] for row in rows] == ["composite3:", "composite4:"]
+    assert rows[0][-1] == rows[1][-1]  # as many programs after the second exemplar as after the first
+
+
 def test_quality_ml_prints_every_seed(capsys, device, tmp_path, tool):
     tool("quality_ml").main(["--seeds", "1", "2", "--shape", "8", "8", "8", "--set", "neighborhood=3",
                               "--set", "pyramid=decimate", "--save", str(tmp_path / "q"),

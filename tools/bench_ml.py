@@ -9,6 +9,7 @@ reference. Timings only: nothing here asserts on speed.
     python tools/bench_ml.py                 # both cases, default device
     python tools/bench_ml.py --case a --device pocl --shape 64 64 64
     python tools/bench_ml.py --voxels-per-item 8      # OpenCL tuning, as synthesize(backend=...) takes it
+    python tools/bench_ml.py --builds composite3 composite4   # the program's build, one exemplar after another
 
 Without tuning options it measures what synthesize() does by default.
 """
@@ -16,15 +17,18 @@ Without tuning options it measures what synthesize() does by default.
 from __future__ import annotations
 
 import argparse
+import os
+import tempfile
 import time
 
 import numpy as np
 
 import clsolid
 from clsolid.ml.opencl import CLBackend
-from clsolid.exemplar import builtin_exemplar, quantise
+from clsolid.exemplar import builtin_exemplar, level_map, quantise
+from clsolid.gallery import gallery_exemplar
 from clsolid.ml.model import build_scale
-from clsolid.core.slices import inserted_depths
+from clsolid.core.slices import inserted_depths, seam_ratio
 from clsolid.ml.params import DEFAULT_BANDWIDTH_FACTOR, MLParams
 
 CASES = {"a": ("thesis case, 9x9", 9), "b": ("7x7 variant", 7)}
@@ -62,6 +66,46 @@ def kernel_rate(device, labels, shape, k: int, factor: float | None, tuning: dic
     return terms / best, best
 
 
+class _TimedBuild(CLBackend):
+    """A back end that adds up the time it spends getting its likelihood program: building it,
+    or finding it built in the device's cache."""
+
+    build_seconds = 0.0
+
+    def _kernels(self, *args, **kwargs):
+        start = time.perf_counter()
+        try:
+            return super()._kernels(*args, **kwargs)
+        finally:
+            self.build_seconds += time.perf_counter() - start
+
+
+def build_times(device, names: list[str], tuning: dict, shape=(16, 16, 16)) -> list[tuple]:
+    """``(name, program, first, again, programs on the device)`` for each 64x64 gallery exemplar in
+    turn, with the parameters synthesize() resolves for it, at its finest scale: the seconds spent
+    getting the likelihood program, relaxing a batch of voxels the first time (the runtime compiles
+    each kernel at its first launch) and the same batch again. A different exemplar with the same
+    options should find the program built and its kernels compiled."""
+    rows = []
+    for name in names:
+        image = gallery_exemplar(name, 64)
+        levels = level_map(image, 32)
+        params = MLParams().for_exemplar(levels.values.size, levels.exact, seam_ratio(image), image.shape)
+        model = build_scale(levels.labels, shape, params, 0)
+        backend = _TimedBuild(device, **tuning)
+        vol = np.random.default_rng(0).choice(model.labels, size=model.shape)
+        backend.start_scale(model, vol, np.ones(model.shape), params)
+        batch = np.arange(0, vol.size, 3)
+        times = []
+        for _ in range(2):
+            start = time.perf_counter()
+            backend.update(batch)
+            backend.volume()  # waits for the launches
+            times.append(time.perf_counter() - start)
+        rows.append((name, backend.build_seconds, *times, len(device.programs)))
+    return rows
+
+
 #: The published relaxation (thesis): ICM, no balance, aligned +in slices; the defaults' cost is compared to it.
 ICM = dict(relaxation="icm", balance=0.0, slice_layout="aligned", insert_slices=4)
 
@@ -84,6 +128,14 @@ def print_timings(label: str, timings: dict) -> None:
     print(f"    end to end: {timings['total_s']:.1f} s, {sum(s['sweeps'] for s in timings['scales'])} sweeps")
 
 
+def print_header(device, tuning: dict) -> float:
+    """Print the device, the tuning and the reference matmul rate (GFLOP/s), measured now; return the rate."""
+    ref = matmul_gflops()
+    print(f"device: {device.name}; tuning: {tuning or 'engine defaults'}")
+    print(f"reference: NumPy float32 matmul {ref:.1f} GFLOP/s (best of 5, 2048^2)")
+    return ref
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--case", choices=["a", "b", "both"], default="both")
@@ -97,16 +149,28 @@ def main(argv=None) -> None:
     ap.add_argument("--vector-width", type=int, choices=(4, 8, 16), default=None,
                     help="exemplar sites per vector (default: the engine's)")
     ap.add_argument("--no-icm", action="store_true", help="skip the ICM run the defaults are compared with")
+    ap.add_argument("--builds", nargs="+", metavar="NAME", default=None,
+                    help="only time getting the likelihood program (a build, or a find in the cache) for each of "
+                         "these 64x64 gallery exemplars in turn, in one process, PoCL's disk cache fresh")
     args = ap.parse_args(argv)
     tuning = {name: value for name, value in (("voxels_per_item", args.voxels_per_item),
                                               ("vector_width", args.vector_width)) if value is not None}
+    if args.builds:  # PoCL's disk cache fresh, before the runtime starts: an earlier run's build would not count
+        with tempfile.TemporaryDirectory(prefix="bench-ml-pocl-") as cache:
+            os.environ["POCL_CACHE_DIR"] = cache
+            device = clsolid.select_device(args.device)
+            print_header(device, tuning)
+            print("the likelihood program, each exemplar in turn (the options synthesize() resolves for it): "
+                  "seconds to build it (or find it built), to relax a batch the first time and again")
+            for name, program, first, again, programs in build_times(device, args.builds, tuning):
+                print(f"  {name}: build {program:.3f} s, first batch {first:.3f} s, again {again:.3f} s; "
+                      f"programs on the device: {programs}")
+        return
     device = clsolid.select_device(args.device)
     labels = quantise(builtin_exemplar("brick"), 32)
     factor = MLParams(bandwidth_factor=args.bandwidth_factor).bandwidth_factor[0]  # as the engine resolves it
     shape = tuple(args.shape)
-    ref = matmul_gflops()
-    print(f"device: {device.name}; tuning: {tuning or 'engine defaults'}")
-    print(f"reference: NumPy float32 matmul {ref:.1f} GFLOP/s (best of 5, 2048^2)")
+    ref = print_header(device, tuning)
     for case in (["a", "b"] if args.case == "both" else [args.case]):
         title, k = CASES[case]
         rate, dt = kernel_rate(device, labels, shape, k, args.bandwidth_factor, tuning)

@@ -2,9 +2,9 @@
 
 An OpenCL driver can list a device that cannot build our kernels. PoCL on LLVM 14 lists
 a Zen 5 CPU, then fails every build ("unknown target CPU 'generic'"); on a Zen 4 CPU it
-builds a tiny kernel but aborts the whole process on 16-wide vectors ("LLVM ERROR: Cannot
-emit physreg copy instruction"). So the probe builds a tiny kernel and runs it (checking its
-result), then runs every method's smoke test (:func:`register_smoke_test`: each builds and
+builds a tiny kernel but aborts the whole process on the 16-wide vectors of the likelihood
+kernels ("LLVM ERROR: Cannot emit physreg copy instruction"). So the probe builds a tiny
+kernel and runs it (checking its result), then runs every method's smoke test (:func:`register_smoke_test`: each builds and
 launches its kernels on a tiny case) at the widest vector width that works (16, 8, then 4),
 each attempt in a child process that an abort cannot take down. The answer, with that
 width, is cached on disk (``clsolid.core.icd.cache_dir()``) and keyed by platform, device,

@@ -19,7 +19,7 @@ def kernel_dir() -> Path:
     install keeps them in the top-level ``kernels/`` beside the package.
     """
     for candidate in (_PACKAGE / "kernels", _PACKAGE.parent / "kernels"):
-        if (candidate / "ml" / "likelihood.cl").is_file():
+        if (candidate / "ml" / "common.cl").is_file():
             return candidate
     raise FileNotFoundError(
         f"clsolid's OpenCL kernels were not found in {_PACKAGE / 'kernels'} or "
@@ -29,10 +29,10 @@ def kernel_dir() -> Path:
 
 @functools.lru_cache(maxsize=None)
 def read_source(name: str) -> str:
-    """Source of ``kernels/<name>`` (e.g. ``"ml/likelihood.cl"``) prefixed by a ``#line`` so errors point at the file.
+    """Source of ``kernels/<name>`` (e.g. ``"ml/common.cl"``) prefixed by a ``#line`` so errors point at the file.
 
-    Read once a process: the search drivers ask for their kernels once per conflict-free set
-    (reading the file each time was 4 % of a 64^3 ``kopf`` run)."""
+    Read once a process: the search drivers ask for their kernels once per conflict-free set,
+    and reading the file each time shows in a run's profile."""
     path = kernel_dir() / name
     return f'#line 1 "kernels/{name}"\n' + path.read_text()
 
@@ -48,6 +48,9 @@ def build(device: Device, name: str | tuple[str, ...], defines: dict[str, int | 
     """Build ``kernels/<name>`` with ``-D`` *defines*; return its kernels by name. Several
     names: one program of their sources in that order (a file that uses another's functions
     after it).
+
+    *defines* are for what changes the code (vector widths, array sizes, which terms exist);
+    sizes and per-input tables go in kernel arguments, or every new input would be a new build.
 
     Programs are cached on the Device by (source, options) and every kernel object is
     retrieved once, so repeated calls are free.

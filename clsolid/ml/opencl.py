@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+import re
 import time
 
 import numpy as np
@@ -20,6 +22,23 @@ from .tiled import largest_tile
 
 _F4 = 4  # bytes per float32 / int32
 _INIT_RUN = 1 << 24  # most voxels the random start draws per launch
+#: The likelihood program's sources, built as one program in this order (each needs those before it).
+SOURCES = ("ml/common.cl", "ml/exact.cl", "ml/pruned.cl", "ml/relax.cl")
+_C_TYPES = {"int": np.int32, "uint": np.uint32, "float": np.float32}
+
+
+@functools.lru_cache(maxsize=None)
+def scalar_dtype() -> np.dtype:
+    """The NumPy twin of the kernels' scalar block ``ml_scalars`` (kernels/ml/common.cl), read from
+    its definition there, so that the two cannot disagree: fields in order, all 4-byte (no padding)."""
+    source = programs.read_source("ml/common.cl")
+    body = re.search(r"typedef struct \{(.*?)\} ml_scalars;", source, re.S).group(1)
+    fields = []
+    for decl in re.sub(r"/\*.*?\*/", "", body, flags=re.S).split(";"):
+        if decl.strip():
+            kind, names = decl.split(None, 1)
+            fields += [(name.strip(), _C_TYPES[kind]) for name in names.split(",")]
+    return np.dtype(fields)
 
 
 def group_tables(model: ScaleModel, vw: int):
@@ -48,11 +67,6 @@ def group_tables(model: ScaleModel, vw: int):
     return patches, chunk_group, chunk_valid.astype(np.int32), values.astype(np.float32), chunk_site
 
 
-def _float_literals(values: np.ndarray) -> str:
-    """*values* as a comma-separated list of exact float32 hex literals, for a ``__constant`` array."""
-    return ",".join(f"{float(v).hex()}f" for v in np.asarray(values, np.float32))
-
-
 class CLBackend:
     """Runs the per-voxel work of :func:`clsolid.ml.driver.run_ml` on an OpenCL device.
 
@@ -68,7 +82,7 @@ class CLBackend:
         Work-group size. The result does not depend on it. On a CPU device the kernels that
         keep per-item arrays (the decision, the pruned sum and its flags) use at most 4: a
         CPU runtime that vectorises a work-group across its items turns those arrays into
-        gathers (Intel's: the pruned sum 2.3x slower at 16 on a 2-core EPYC; PoCL's 1.1x).
+        gathers, which cost more than the wider work-group gains.
     max_batch : int
         Most voxels relaxed per launch (bounds the scratch buffer).
     """
@@ -145,18 +159,32 @@ class CLBackend:
 
     # -- kernels -----------------------------------------------------------------------
     def _kernels(self, model: ScaleModel, n_labels: int, projected: pruned.ProjectedWindows | None = None) -> dict:
-        """The likelihood program for *model*; *projected*: the pruned sum's projected candidates, if any."""
+        """The likelihood program for *model*; *projected*: the pruned sum's projected candidates, if any.
+
+        Only what changes the code is compiled in (array sizes, which terms exist); the exemplar's
+        tables and every size are arguments, so one build serves every exemplar of the same options."""
         views, nr = model.offsets.shape[:2]
-        return programs.build(self.device, "ml/likelihood.cl", {
+        p = self.params
+        return programs.build(self.device, SOURCES, {
             "NR": nr, "NCHILD": nr - model.parent_rows,  # the rows after NCHILD: parent terms
-            "VW": self.vw, "VB": self.vb, "NGMAX": n_labels, "NLMAX": n_labels, "NVIEW": views,
-            "NS": self.params.n_similar if self.params.likelihood == "pruned" else 1,
-            **({"PROJ_K": self.params.prune_projected_k, "PROJ_D": projected.axes.shape[1], "PROJ_P": projected.probe}
-               if projected is not None else {}),
+            "VW": self.vw, "VB": self.vb, "NLV": -(-n_labels // self.vw), "NVIEW": views,
+            "NS": p.n_similar if p.likelihood == "pruned" else 1,
+            # PROJ_P: the option, not projected.probe (which a small exemplar's fewer lists clamp):
+            # the kernel stops at the last list there is
+            **({"PROJ_K": p.prune_projected_k, "PROJ_D": projected.axes.shape[1],
+                "PROJ_P": max(p.prune_projected_probe, 1)} if projected is not None else {}),
             "MISMATCH": 2 if model.costs is not None else int(model.mismatch),
-            **({"COSTS": _float_literals(model.costs)} if model.costs is not None else {}),
-            **({"FALLOFF": _float_literals(np.sqrt(model.term_weight))} if model.term_weight is not None else {}),
+            "TERM_WEIGHTS": int(model.term_weight is not None),
         })
+
+    def _set_scalars(self, **fields) -> None:
+        """Set *fields* of the kernels' scalar block (``ml_scalars``) and copy it to the device; the
+        copy blocks, and the queue is in order, so launches already queued read the old values."""
+        import pyopencl as cl
+
+        for name, value in fields.items():
+            self.scalars[name] = value
+        cl.enqueue_copy(self.device.queue, self.scalars_buf, self.scalars)
 
     def _pad(self, n: int) -> int:
         return -(-n // self.vw) * self.vw
@@ -227,30 +255,42 @@ class CLBackend:
         self.chunk_site = self._buf(canon[chunk_site])  # the source each lane records
         views = model.offsets.shape[0]
         mf, ctx = cl.mem_flags, self.device.context
+        self.scalars = np.zeros(1, scalar_dtype())  # the block's fields come with load_state
+        self.scalars_buf = cl.Buffer(ctx, mf.READ_ONLY, self.scalars.nbytes)
+        self._set_scalars(n_views=views, n_labels=n_labels, n_groups=gvals.size, n_chunks=chunk_group.size,
+                          n_union=model.union_offsets.shape[0], k=1.0 / (2.0 * model.bandwidth**2), xi=params.xi,
+                          heuristic=params.heuristic_code, relaxation=params.relaxation_code,
+                          score_stride=score_stride(model.shape), n_sample=min(params.n_sample, model.n_sites),
+                          min_weight=params.prune_min_weight, need_source=params.n_sample == 0)
         self.vol_buf = cl.Buffer(ctx, mf.READ_WRITE, model.state_blocks * self.capacity * _F4)
         self.temp_buf = cl.Buffer(ctx, mf.READ_WRITE, model.state_blocks * self.capacity * _F4)
         self.src = cl.Buffer(ctx, mf.READ_WRITE, views * self.capacity * _F4)
+        self.state = (self.vol_buf, self.temp_buf, self.src)
         self.batch = batch = min(self.max_batch, self.capacity)
         if pruning is not None:
             self._start_pruned(pruning, gvals, batch)
         self.n_groups, self.n_chunks = gvals.size, chunk_group.size
         self.patches = self._buf(patches)
         self.chunk_group, self.chunk_valid = self._buf(chunk_group), self._buf(chunk_valid)
+        self.exemplar = (self.patches, self.chunk_group, self.chunk_valid, self.chunk_site)
         # The Gaussian factor of every (group, label) pair and its log (decide's view_logf).
         self.kern = self._buf(kernel_tables(model, gvals, self._pad(n_labels)))
         self.labels = self._buf(model.labels.astype(np.float32))
         self.offsets = self._buf(model.offsets.astype(np.int32))
+        # The window terms: offsets, each term's weight's square root and each label's cost (a
+        # placeholder where the model has none), in buffers so that one build serves every exemplar.
+        roots = np.ones(1) if model.term_weight is None else np.sqrt(model.term_weight)
+        costs = np.zeros(1) if model.costs is None else model.costs
+        self.terms = (self.offsets, self._buf(roots.astype(np.float32)), self._buf(costs.astype(np.float32)))
         self.union = self._buf(model.union_offsets.astype(np.int32))
         self.vox_buf = cl.Buffer(ctx, mf.READ_ONLY, batch * _F4)
         self.packed = (cl.Buffer(ctx, mf.WRITE_ONLY, 2 * batch * _F4),
                        cl.Buffer(ctx, mf.WRITE_ONLY, views * batch * _F4))
         self.sums = cl.Buffer(ctx, mf.READ_WRITE, batch * views * self._pad(n_labels) * _F4)
-        self.kfactor = np.float32(1.0 / (2.0 * model.bandwidth**2))
         self.bias = cl.Buffer(ctx, mf.READ_ONLY, self._pad(n_labels) * _F4)
         # The balance's scores are the whole volume's, whichever block the state holds.
         self._scores = np.zeros((n_score_slots(model.shape), n_labels), np.float32)
         self.scores_buf = self._buf(self._scores, writable=True)
-        self.score_args = (self.scores_buf, np.int32(score_stride(model.shape)))
         self._vol = self._temp = self._src = None  # host copies of the state, made when first read
         self.start_sweep(0, 0, 1.0, np.zeros(n_labels))
 
@@ -268,7 +308,8 @@ class CLBackend:
         self.n_block = int(np.prod(self.block))
         if self.n_block > self.capacity:
             raise ValueError(f"a {self.block} block does not fit the buffers made for {self.capacity} voxels")
-        self.placement = tuple(np.int32(v) for v in tuple(origin) + tuple(self.model.shape))
+        (Z, Y, X), (oz, oy, ox), (GZ, GY, GX) = self.block, origin, self.model.shape
+        self._set_scalars(Z=Z, Y=Y, X=X, n_vox=self.n_block, oz=oz, oy=oy, ox=ox, GZ=GZ, GY=GY, GX=GX)
         if sources is None:
             sources = np.full((views, self.n_block), -1, np.int32)
         cl.enqueue_copy(q, self.vol_buf, np.ascontiguousarray(vol, np.float32))
@@ -299,8 +340,8 @@ class CLBackend:
         self.coherence = (self._buf(pruning.voxel_offsets), self._buf(pruning.exemplar_offsets))
         self.windows = (self._buf(table.window_of), self._buf(similar.astype(np.int32)),
                         self._buf(rows), self._buf(group),
-                        self._buf(np.log(table.count).astype(np.float32)), self._buf(table.source),
-                        np.int32(table.grid[0]), np.int32(table.grid[1]))
+                        self._buf(np.log(table.count).astype(np.float32)), self._buf(table.source))
+        self._set_scalars(grid_rows=table.grid[0], grid_cols=table.grid[1])
         self.flags_buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, batch * _F4)
         proj, views = pruning.projected, model.offsets.shape[0]
         k = 0 if proj is None else pruning.params.prune_projected_k
@@ -311,10 +352,11 @@ class CLBackend:
         """The projected search's arguments: the sites sorted by list (the lower site first)."""
         order = np.argsort(proj.list_of, kind="stable")
         start = np.searchsorted(proj.list_of[order], np.arange(proj.centres.shape[0] + 1))
+        self._set_scalars(n_lists=proj.centres.shape[0])
         return (self._buf(proj.scale.astype(np.float32)), self._buf(proj.mean.astype(np.float32)),
                 self._buf(_float8_rows(proj.axes)), self._buf(_float8_rows(proj.centres)),
-                np.int32(proj.centres.shape[0]), self._buf(start.astype(np.int32)),
-                self._buf(order.astype(np.int32)), self._buf(_float8_rows(proj.sites[order])), self.windows[0])
+                self._buf(start.astype(np.int32)), self._buf(order.astype(np.int32)),
+                self._buf(_float8_rows(proj.sites[order])), self.windows[0])
 
     def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
         """Random stream (Philox key *seed*, counter tag *tag*), global temperature *t_in*
@@ -325,11 +367,10 @@ class CLBackend:
         padded[: bias.size] = bias
         cl.enqueue_copy(self.device.queue, self.bias, padded)
         key = seed_key(seed)
-        self.sample_key = (np.uint32(key[0]), np.uint32(key[1]), np.uint32(sample_tag(tag)))
         # the projected candidates parzen_candidates reads this sweep (projected_nearest runs if any)
         self.n_projected = self.params.prune_projected_k if pruned.projects(self.params, tag) else 0
-        self.sweep_args = (np.int32(self.params.relaxation_code), self.bias, np.uint32(key[0]), np.uint32(key[1]),
-                           np.uint32(tag), np.float32(t_in))
+        self._set_scalars(key0=key[0], key1=key[1], tag=tag, sample_tag=sample_tag(tag), t_in=t_in,
+                          n_projected=self.n_projected)
 
     def update(self, voxels: np.ndarray) -> None:
         """Relax one conflict-free set of voxels (flat indices), batch by batch."""
@@ -350,33 +391,26 @@ class CLBackend:
         if self.params.likelihood == "pruned":  # with the default settings no voxel can need the exact sum
             n_exact = self._exact_first(voxels) if pruned.may_need_exact(self.params) else 0
         if n_exact:
-            self.k["parzen_groups"](
-                q, (self._global(-(-n_exact * views // self.vb)),), (self.local,),
-                self.vol_buf, self.temp_buf, *self._shape_args(), self.vox_buf, np.int32(n_exact * views),
-                np.int32(views), self.offsets, self.patches, self.chunk_group, self.chunk_valid,
-                np.int32(self.n_chunks), np.int32(self.n_groups), self.kfactor, self.sums,
-                self.chunk_site, self.src, np.int32(self.n_block))
+            self.k["parzen_groups"](q, (self._global(-(-n_exact * views // self.vb)),), (self.local,),
+                                    self.scalars_buf, np.int32(n_exact * views), *self.state, self.vox_buf,
+                                    self.sums, *self.terms, *self.exemplar)
         if self.params.likelihood == "pruned":
             self.exact_visits += n_exact
             self.pruned_visits += voxels.size - n_exact
         if n_exact < voxels.size:
             items = (self._global(n_items - n_exact * views, self.item_local),)
+            item_range = (np.int32(n_exact * views), np.int32(n_items))
             if self.projection is not None and self.n_projected:
                 q.finish()  # timed alone: the sweeps without it are the ETA's rate
                 t0 = time.perf_counter()
-                self.k["projected_nearest"](
-                    q, items, (self.item_local,), self.vol_buf, *self._shape_args(), self.vox_buf,
-                    np.int32(n_exact * views), np.int32(n_items), np.int32(views), self.offsets, *self.projection,
-                    self.projected_out)
+                self.k["projected_nearest"](q, items, (self.item_local,), self.scalars_buf, *item_range,
+                                            self.vol_buf, self.vox_buf, self.offsets, *self.projection,
+                                            self.projected_out)
                 q.finish()
                 self.search_seconds += time.perf_counter() - t0
-            self.k["parzen_candidates"](
-                q, items, (self.item_local,),
-                self.vol_buf, self.temp_buf, *self._shape_args(), *self.placement, self.vox_buf,
-                np.int32(n_exact * views), np.int32(n_items), np.int32(views), self.offsets, *self.coherence,
-                self.src, np.int32(self.n_block), *self.windows, self.projected_out, np.int32(self.n_projected),
-                np.int32(min(self.params.n_sample, m.n_sites)), *self.sample_key,
-                np.int32(self.n_groups), self.kfactor, self.sums)
+            self.k["parzen_candidates"](q, items, (self.item_local,), self.scalars_buf, *item_range,
+                                        *self.state, self.vox_buf, self.sums, *self.terms, *self.coherence,
+                                        *self.windows, self.projected_out)
         return n_items
 
     def _exact_first(self, voxels: np.ndarray) -> int:
@@ -384,32 +418,22 @@ class CLBackend:
         the device) and return how many there are."""
         import pyopencl as cl
 
-        q, m = self.device.queue, self.model
+        q = self.device.queue
         flags = np.empty(voxels.size, np.int32)
-        self.k["prune_flags"](q, (self._global(voxels.size, self.item_local),), (self.item_local,), self.temp_buf,
-                              *self._shape_args(), self.vox_buf, np.int32(voxels.size),
-                              np.int32(m.offsets.shape[0]), self.offsets, self.src,
-                              np.int32(self.n_block), np.float32(self.params.prune_min_weight),
-                              np.int32(self.params.n_sample == 0), self.flags_buf)
+        self.k["prune_flags"](q, (self._global(voxels.size, self.item_local),), (self.item_local,), self.scalars_buf,
+                              np.int32(voxels.size), self.temp_buf, self.src, self.vox_buf, self.offsets,
+                              self.flags_buf)
         cl.enqueue_copy(q, flags, self.flags_buf)
         exact = flags.astype(bool)
         voxels[:] = np.concatenate([voxels[exact], voxels[~exact]])
         cl.enqueue_copy(q, self.vox_buf, voxels)
         return int(exact.sum())
 
-    def _shape_args(self) -> tuple:
-        return tuple(np.int32(s) for s in self.block)
-
     def _update_batch(self, voxels: np.ndarray) -> None:
-        m = self.model
         self._parzen(voxels)
-        self.k["decide"](
-            self.device.queue, (self._global(voxels.size, self.item_local),), (self.item_local,),
-            self.vol_buf, self.temp_buf, *self._shape_args(), *self.placement, self.vox_buf,
-            np.int32(voxels.size), np.int32(m.offsets.shape[0]), self.sums, np.int32(self.n_groups),
-            self.kern, self.labels, np.int32(m.labels.size), self.union,
-            np.int32(m.union_offsets.shape[0]), np.float32(self.params.xi), np.int32(self.params.heuristic_code),
-            *self.sweep_args, *self.score_args)
+        self.k["decide"](self.device.queue, (self._global(voxels.size, self.item_local),), (self.item_local,),
+                         self.scalars_buf, np.int32(voxels.size), self.vol_buf, self.temp_buf, self.vox_buf,
+                         self.sums, self.kern, self.labels, self.union, self.bias, self.scores_buf)
 
     def read_voxels(self, voxels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The values, temperatures and sources ``(views, m)`` of some voxels of the block (its
@@ -422,8 +446,8 @@ class CLBackend:
             batch = np.ascontiguousarray(voxels[i: i + self.batch], np.int32)
             n = batch.size
             cl.enqueue_copy(q, self.vox_buf, batch)
-            self.k["pack_state"](q, (self._global(n),), (self.local,), self.vol_buf, self.temp_buf, self.src,
-                                 np.int32(self.n_block), np.int32(views), self.vox_buf, np.int32(n), *self.packed)
+            self.k["pack_state"](q, (self._global(n),), (self.local,), self.scalars_buf, np.int32(n), *self.state,
+                                 self.vox_buf, *self.packed)
             part_values, part_sources = np.empty((2, n), np.float32), np.empty((views, n), np.int32)
             cl.enqueue_copy(q, part_values, self.packed[0])
             cl.enqueue_copy(q, part_sources, self.packed[1])
@@ -505,8 +529,8 @@ class CLBackend:
         n_labels = self.model.labels.size
         out = np.empty(n_items * n_labels, np.float32)
         buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, out.nbytes)
-        self.k["lcpdf"](self.device.queue, (self._global(n_items),), (self.local,), self.sums,
-                        np.int32(n_items), np.int32(self.n_groups), self.kern, np.int32(n_labels), buf)
+        self.k["lcpdf"](self.device.queue, (self._global(n_items),), (self.local,), self.scalars_buf,
+                        np.int32(n_items), self.sums, self.kern, buf)
         cl.enqueue_copy(self.device.queue, out, buf)
         return out.reshape(voxels.size, -1, n_labels)[rows].transpose(1, 0, 2)
 

@@ -146,7 +146,7 @@ def relax(relaxation: str, code: int, logl: np.ndarray, labels: np.ndarray, x: n
 
     ``relaxation`` is ``"icm"`` (argmax), ``"gibbs"`` (a draw from the combined, normalised
     LCPDF) or ``"annealing"`` (a uniform proposal lambda, kept if p = P(lambda)/P(x) > 1 or
-    p * t_in > q). ``words`` ``(m, 4)`` are the voxels' Philox words (see ``kernels/ml/likelihood.cl``,
+    p * t_in > q). ``words`` ``(m, 4)`` are the voxels' Philox words (see ``kernels/ml/relax.cl``,
     ``decide``, for which word serves which draw); ``bias`` ``(L,)`` is added to the combined
     log score (h2) or to each view's (h1). h1 heuristics combine per-view solutions: the
     argmax, a draw from that view, or the proposal where that view alone accepts it.

@@ -1,5 +1,5 @@
 /* The random start: every voxel takes a random pixel of the coarsest exemplar.
- * Layout as in ml/likelihood.cl: (Z, Y, X) row-major; global id 0 = flat voxel index - first. */
+ * Layout as in ml/common.cl: (Z, Y, X) row-major; global id 0 = flat voxel index - first. */
 #include <pyopencl-random123/philox.cl>
 
 /* Random exemplar pixels: Philox4x32-10 keyed by the seed, counter (x, y, z, tag). vol holds
