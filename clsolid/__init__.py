@@ -8,8 +8,17 @@ from ._version import __version__
 from .api import resume, synthesize
 from .core.device import Device, list_devices, select_device
 from .core.synthesis import SweepInfo, SynthesisResult
-from .errors import (ClsolidError, DeviceMemoryError, DeviceSkippedWarning, ExemplarWarning, HostMemoryError,
-                     InputError, KernelBuildError, LargeTiffWarning, NoDeviceError)
+from .errors import (
+                     ClsolidError,
+                     DeviceMemoryError,
+                     DeviceSkippedWarning,
+                     ExemplarWarning,
+                     HostMemoryError,
+                     InputError,
+                     KernelBuildError,
+                     LargeTiffWarning,
+                     NoDeviceError,
+)
 from .ml.backends import BackendOptions
 from .ml.params import HEURISTICS, MLParams
 from .search.params import SearchParams

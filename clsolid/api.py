@@ -18,8 +18,8 @@ from .errors import ExemplarWarning, InputError
 from .ml.backends import FOOTPRINT, SCRATCH_FOOTPRINT, BackendOptions, backend_options, is_reference, make_backend
 from .ml.params import MLParams
 from .phases import is_categorical
-from .search.params import METHODS as SEARCH_METHODS
 from .search import FOOTPRINT as SEARCH_FOOTPRINT
+from .search.params import METHODS as SEARCH_METHODS
 from .search.params import SearchParams
 
 log = logging.getLogger(__name__)

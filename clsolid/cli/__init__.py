@@ -11,8 +11,16 @@ import difflib
 import sys
 import warnings
 
-from ..errors import (EXIT_CODES, ClsolidError, DeviceMemoryError, InputError, KernelBuildError,
-                      MissingDependencyError, NoDeviceError, OutputError)
+from ..errors import (
+    EXIT_CODES,
+    ClsolidError,
+    DeviceMemoryError,
+    InputError,
+    KernelBuildError,
+    MissingDependencyError,
+    NoDeviceError,
+    OutputError,
+)
 from .evaluate import add_evaluate, run_evaluate
 from .synth import add_synth, run_synth
 

@@ -63,8 +63,15 @@ def run_evaluate(args: argparse.Namespace) -> int:
 
 
 def _run_evaluation(args: argparse.Namespace) -> None:
-    from ..report import format_table, inserted_from_sidecar, like_with_like, load_exemplar, load_volume, plot_report
-    from ..report import read_sidecar
+    from ..report import (
+        format_table,
+        inserted_from_sidecar,
+        like_with_like,
+        load_exemplar,
+        load_volume,
+        plot_report,
+        read_sidecar,
+    )
 
     if args.exemplar is None or args.volume is None:
         raise InputError("EXEMPLAR and VOLUME are both required (or give only --track FILE.json)")

@@ -23,8 +23,20 @@ from typing import Any
 
 from .._version import __version__
 from ..api import METHODS
-from ..core.options import (documented, Anything, Check, Choice, Flag, Int, add_arguments, declared, names, option,
-                            refuse_unknown, validate)
+from ..core.options import (
+    Anything,
+    Check,
+    Choice,
+    Flag,
+    Int,
+    add_arguments,
+    declared,
+    documented,
+    names,
+    option,
+    refuse_unknown,
+    validate,
+)
 from ..errors import InputError, OutputError
 from ..ml.backends import BackendOptions
 from ..ml.params import MLParams
@@ -191,7 +203,8 @@ def option_reference() -> str:
     from ..core.options import reference_markdown
 
     titles = {"command": "The command's own (`clsolid synth`)", "ml": "`ml`: `MLParams`",
-              "wl, kopf, chen-wang": "`wl`, `kopf`, `chen-wang`: `SearchParams`", "backend": "Back end: `BackendOptions`"}
+              "wl, kopf, chen-wang": "`wl`, `kopf`, `chen-wang`: `SearchParams`",
+              "backend": "Back end: `BackendOptions`"}
     head = ["# Option reference", "",
             "<!-- Generated at build time by docs/_ext/option_reference.py from the options' declarations; "
             "do not edit. -->", "",

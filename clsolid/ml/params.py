@@ -8,8 +8,20 @@ from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 from ..core.geometry import window_grid
-from ..core.options import (documented, Check, Choice, Int, Real, Reals, levels_option, neighborhood_option, option, scales_option,
-                            validate, views_option)
+from ..core.options import (
+    Check,
+    Choice,
+    Int,
+    Real,
+    Reals,
+    documented,
+    levels_option,
+    neighborhood_option,
+    option,
+    scales_option,
+    validate,
+    views_option,
+)
 from ..core.slices import FALLBACK_SPACING, SEAM_GAP, SEAM_SHOWS
 from ..core.views import VIEW_AXES, VIEW_SETS  # noqa: F401 (VIEW_AXES: this method's name for them too)
 from ..errors import InputError

@@ -1,11 +1,23 @@
-"""Parameters of the fixed-neighbourhood search methods (Urs thesis ch. 5): each declared once, with its check and help."""
+"""Parameters of the fixed-neighbourhood search methods (Urs thesis, ch. 3 and 5): each declared once,
+with its check and help."""
 
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, replace
 
-from ..core.options import (documented, Choice, Flag, Int, Real, levels_option, neighborhood_option, option, scales_option,
-                            validate, views_option)
+from ..core.options import (
+    Choice,
+    Flag,
+    Int,
+    Real,
+    documented,
+    levels_option,
+    neighborhood_option,
+    option,
+    scales_option,
+    validate,
+    views_option,
+)
 from ..core.orders import ORDERS
 from ..core.views import VIEW_SETS
 from ..errors import InputError
@@ -107,10 +119,11 @@ class SearchParams:
                                           "too", group=_TUNE, check=Flag(), advanced=True,
                                           none="on for wl, and for kopf on grey exemplars")
     specify: bool | None = option(None, "wl, kopf: after every pass, map the block's grey levels rank for rank onto "
-                                  "the exemplar's histogram", group=_SEARCH, check=Flag(), none="on for kopf, off for wl")
+                                  "the exemplar's histogram", group=_SEARCH, check=Flag(),
+                                  none="on for kopf, off for wl")
     balance: float | None = option(None, "on categorical exemplars, kopf's vote of each set aims this far "
-                                   "towards the exemplar's phase fractions (0: off, the thesis)", group=_SEARCH, check=Real(0, 1), metavar="B",
-                                   none="1 for kopf, 0 for the others")
+                                   "towards the exemplar's phase fractions (0: off, the thesis)", group=_SEARCH,
+                                   check=Real(0, 1), metavar="B", none="1 for kopf, 0 for the others")
     insert_spacing: float | None = option(None, "anchor slices: an exemplar slice about every this many voxels of "
                                           "each view's depth (0: none, the thesis)", group=_TUNE, check=Real(0),
                                           advanced=True, none=f"{DEFAULT_INSERT_SPACING:g} for kopf, 0 for the others")
