@@ -144,6 +144,8 @@ def render(parser: argparse.ArgumentParser, title: str = "Command-line reference
         lines += [escape(parser.description), ""]
     lines += [f"Every option of `{prog}`, subcommand by subcommand and group by group, read from the "
               "parser itself when this site was built.", ""]
+    if parser.epilog:  # e.g. the exit statuses, kept verbatim
+        lines += ["```text", parser.epilog.rstrip(), "```", ""]
     subs = subcommands(parser)
     if not subs:
         lines += group_sections(parser, prog)
