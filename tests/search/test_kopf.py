@@ -38,7 +38,7 @@ def test_opencl_run_matches_the_reference(device, name, views):
     ex = gallery_exemplar(name, 64)[:32, :32].astype(np.float64)
     # without the histogram specification: it ranks the voxels, and a float32 difference in
     # the last bits of two near-equal means swaps their ranks and so their values
-    # the exact search, the reference path (the coherence search's run: test_search_coherence)
+    # the exact search, the reference path (the coherence search's run: tests/search/test_coherence.py)
     params = SearchParams(method="kopf", neighborhood=5, scales=2, iterations=2, views=views, specify=False,
                           search="exact")
     ref = run_search(ex, (10, 12, 14), params, 3, ReferenceMatcher)[0]

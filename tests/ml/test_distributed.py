@@ -35,7 +35,7 @@ def labels(brick_labels):
 
 
 # The exact sum's Dask run is slow-only (22 s): its tiles equal the one-piece run in
-# tests/test_tiles.py, and what Dask adds (sources to the workers and back) is the same for
+# tests/core/test_tiles.py, and what Dask adds (sources to the workers and back) is the same for
 # both sums, checked by default on the pruned one.
 @pytest.mark.parametrize("likelihood", [pytest.param("exact", marks=pytest.mark.slow), "pruned"])
 def test_distributed_run_is_the_one_process_run(device, client, labels, likelihood):

@@ -62,7 +62,7 @@ def test_anchors_keep_kopf_from_growing_its_own_mirror_image(seed):
     then show the same 2D texture). porous50 at 24^3, seeds 1-4: mirror 0.30-0.51 without
     anchors, -0.10-0.11 with the default's. lamellae is not tested here: a 24^3 block holds
     too few of its bands for the anchors to decide (0.04-0.69 without, -0.01-0.49 with);
-    at 48^3 its mirror is a slow test (test_materials)."""
+    at 48^3 its mirror is a slow test (tests/ml/test_materials.py)."""
     ex = gallery_exemplar("porous50", 64)
     mirror = {}
     for spacing in (0, None):

@@ -23,7 +23,7 @@ CASES = [  # (neighborhood, views, heuristic, shape, scales)
 @pytest.mark.parametrize("k, views, heuristic, shape, scales", CASES)
 def test_whole_run_matches_reference(device, small_labels, k, views, heuristic, shape, scales):
     # without the balance: its per-set fit turns float32's last bits into other biases
-    # (see tests/test_relaxation.py, test_balance_runs_alike)
+    # (see tests/ml/test_relaxation.py, test_balance_runs_alike)
     params = MLParams(neighborhood=k, views=views, heuristic=heuristic, scales=scales, insert_slices=1, balance=0.0)
     ref, ref_t, _ = run_ml(small_labels, shape, params, 11, ReferenceBackend())
     got, got_t, _ = run_ml(small_labels, shape, params, 11, CLBackend(device))
