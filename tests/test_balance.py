@@ -103,6 +103,7 @@ def test_a_run_keeps_the_exemplar_fractions(device):
     assert abs(got[0.0] - want) > abs(got[1.0] - want), got
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("kind", ["opencl", "tiled", "reference"])
 def test_the_balance_reads_a_sets_values_and_score_rows_as_the_whole_would_give(device, kind):
     """After every set the balance reads only that set's values and score rows (a gather on

@@ -79,6 +79,7 @@ def test_parent_terms_add_their_weighted_distance(small_labels, distance, fallof
         np.testing.assert_allclose(got, want, rtol=1e-6)  # weighted: float32 costs
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("kw", [
     dict(distance="squared"), dict(distance="weighted"), dict(distance="squared", falloff=2.0),
     dict(distance="squared", views=3, parent_weight=1.0),

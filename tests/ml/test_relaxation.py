@@ -76,6 +76,7 @@ def _fragile(relaxation, code, logl, labels, x, words, t_in, bias, eps=1e-3, tri
     return out
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("relaxation", ["gibbs", "annealing"])
 @pytest.mark.parametrize("heuristic", ["h2-product", "h2-min", "h2-max", "h1-lowest", "h1-highest", "h1-mean"])
 def test_one_step_decides_as_the_reference(device, small_labels, relaxation, heuristic):
@@ -126,6 +127,7 @@ def test_same_seed_same_volume_whatever_the_work_group(device, small_labels, rel
     assert np.mean(a != c) > 0.2  # stochastic relaxations keep the seeds apart
 
 
+@pytest.mark.each_device
 def test_gibbs_draws_follow_the_combined_lcpdf(device, small_labels):
     """Repeated Gibbs updates of one set on a fixed state: label frequencies match the
     normalised product of the views' LCPDFs (a pooled chi-square, loose bound)."""

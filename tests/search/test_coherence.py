@@ -116,6 +116,7 @@ def test_the_use_is_counted_anew_from_the_inherited_matches():
                                                           minlength=fine.usage.size))
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("parent, spread_eps", [(False, None), (True, None), (True, 0.3)])
 def test_the_kernel_searches_as_the_numpy_gathering_does(device, parent, spread_eps):
     """coherence_best gathers squares, parents and proposals on the device: the same sites,
@@ -370,6 +371,7 @@ def test_phase_nearest_is_each_phases_nearest_site(mismatch):
             assert centres[got[s, j]] == phase
 
 
+@pytest.mark.each_device
 def test_phase_nearest_on_the_device_is_the_references(device):
     rng = np.random.default_rng(6)
     table, centres = _phase_table(rng, n_sites=500)

@@ -47,6 +47,7 @@ def test_the_reference_is_the_nearest_site_on_the_components_measured_on_every_t
     assert (dist >= least * (1 - 1e-6)).all() and np.mean(site == exact) >= 0.5
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("parent", [False, True])
 def test_the_device_projects_and_searches_as_the_reference(device, parent):
     """Queries gathered and projected on the device (float32) against NumPy's gathers and
