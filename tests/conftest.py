@@ -93,6 +93,15 @@ def small_labels(brick_labels):
     return quantise(brick_labels[:24, :24], 16)
 
 
+def slow_except(cases, *keep):
+    """*cases* for ``pytest.mark.parametrize``, each marked ``slow`` but those at the indices
+    *keep*: a large parametrization keeps a small representative case in the default run.
+    A tuple is one case's arguments, as parametrize reads it."""
+    slow = pytest.mark.slow
+    return [case if i in keep else pytest.param(*case if isinstance(case, tuple) else (case,), marks=slow)
+            for i, case in enumerate(cases)]
+
+
 def random_state(model, seed=0, cold=0.3):
     """A random volume and temperatures (some exactly 0) for a scale model."""
     rng = np.random.default_rng(seed)

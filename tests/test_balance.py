@@ -88,6 +88,7 @@ def test_score_lattice(shape):
         assert math.gcd(stride, shape[2]) == 1 and math.gcd(stride, shape[1]) == 1
 
 
+@pytest.mark.slow
 def test_a_run_keeps_the_exemplar_fractions(device):
     """Gibbs with the balance ends within a point of porous80 (about 20/80); without, it drifts."""
     img = gallery_exemplar("porous80", 64)

@@ -98,9 +98,11 @@ def test_the_patterns_find_what_the_readme_cites():
     assert _slug("Chen-Wang weights") == "chen-wang-weights" and _slug("## `clsolid synth`"[3:]) == "clsolid-synth"
 
 
-def test_ci_runs_the_readme_test_command():
-    command = (ROOT / ".ci" / "run").read_text(encoding="utf-8").strip().splitlines()[-1]
-    assert command in (ROOT / "README.md").read_text(encoding="utf-8")
+def test_ci_runs_the_readme_test_command_then_the_slow_tests():
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8").splitlines()
+    readme = (ROOT / "README.md").read_text(encoding="utf-8").splitlines()
+    command = next(line for line in readme if line.endswith("python -m pytest"))
+    assert command in ci and ci.index(command) < ci.index("python -m pytest -m slow")
 
 
 def test_the_docs_name_no_tracker_issues():

@@ -5,6 +5,8 @@ import sys
 import zipfile
 from pathlib import Path
 
+import pytest
+
 import clsolid
 from clsolid.core import programs
 
@@ -16,6 +18,7 @@ def test_kernel_loader_finds_the_sources():
     assert programs.read_source("ml/likelihood.cl").startswith('#line 1 "kernels/ml/likelihood.cl"')
 
 
+@pytest.mark.slow  # builds a wheel with pip (seconds); the loader's source layout is checked above
 def test_wheel_contains_the_kernels(tmp_path):
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q",
                     "-w", str(tmp_path), str(ROOT)], check=True)

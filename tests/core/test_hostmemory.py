@@ -100,6 +100,7 @@ def _traced_peak(side: int, device, options: dict) -> int:
         tracemalloc.stop()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("options, most", [
     ({"likelihood": "exact", "sweeps": 1}, 28),
     ({"likelihood": "exact", "sweeps": 1, "tile": 20}, 30),

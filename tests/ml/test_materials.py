@@ -10,6 +10,7 @@ that these tests are known to fail where the defect is.
 
 import numpy as np
 import pytest
+from conftest import slow_except
 
 import clsolid
 from clsolid.gallery import gallery_exemplar
@@ -43,6 +44,7 @@ def grown(device):
     return grow
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", MATERIALS)
 def test_defaults_keep_every_phase_fraction(grown, name):
     ex, vol = grown(name)
@@ -50,6 +52,7 @@ def test_defaults_keep_every_phase_fraction(grown, name):
     assert phase_error_pp(ex, vol) <= 3.0, f"{name}: a phase is off by {phase_error_pp(ex, vol):.1f} pp"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", MATERIALS)
 def test_defaults_are_not_their_own_mirror_image(grown, name):
     """The mean over three seeds: one 32^3 block of a material with porous80's correlation
@@ -60,6 +63,7 @@ def test_defaults_are_not_their_own_mirror_image(grown, name):
     assert r <= 0.2, f"{name}: correlation with the x<->z mirror is {r:.2f} on average"
 
 
+@pytest.mark.slow
 def test_default_features_are_as_tall_as_wide(grown, device):
     """composite3's particles are round. With the defaults the stretch (clsolid.metrics.stretch:
     height over width of the correlation lengths, against the exemplar's) stays within 1.15
@@ -74,6 +78,7 @@ def test_default_features_are_as_tall_as_wide(grown, device):
     assert min(stretch(ex, every_term).values()) > 1.3  # the defect the default fixes is there without it
 
 
+@pytest.mark.slow
 def test_the_thesis_form_collapses_and_mirrors(device):
     """The defect the defaults fix is there in the published form (so the tests above can fail)."""
     ex = gallery_exemplar("fibres", 64)
@@ -82,6 +87,7 @@ def test_the_thesis_form_collapses_and_mirrors(device):
     assert phase_error_pp(ex, vol) > 10
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("relaxation", RELAXATIONS)
 def test_every_relaxation_is_reproducible_by_seed(device, relaxation):
     ex = gallery_exemplar("composite3", 64)
@@ -256,8 +262,8 @@ def test_a_material_does_not_depend_on_the_values_of_its_phases(device):
     assert abs(scores[0] - scores[1]) <= 0.1, f"C2 {scores[0]:.2f} against {scores[1]:.2f} with the values swapped"
 
 
-@pytest.mark.parametrize("name, levels, spacing", [("porous50", 32, 5.0), ("composite4", 32, 5.0),
-                                                   ("gravel", 32, 6.0), ("composite3", 2, 6.0)])
+@pytest.mark.parametrize("name, levels, spacing", slow_except([("porous50", 32, 5.0), ("composite4", 32, 5.0),
+                                                               ("gravel", 32, 6.0), ("composite3", 2, 6.0)], 0))
 def test_slice_spacing_follows_the_exemplar(device, name, levels, spacing):
     """+in slices every 5 voxels on categorical exemplars, every 6 on grey ones (docs/choices.md),
     whole exemplar windows on both; a spacing or piece given is kept."""

@@ -3,6 +3,7 @@ and the exact sum where the pruned one cannot be trusted."""
 
 import numpy as np
 import pytest
+from conftest import slow_except
 
 import clsolid
 from clsolid.errors import DeviceMemoryError, InputError
@@ -239,6 +240,7 @@ def test_one_pruned_gibbs_sweep_matches_reference(device, small_labels, distance
     np.testing.assert_allclose(cl_b.temperature(), ref.temperature(), atol=1e-6)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["porous50", "composite3", "gravel"])
 def test_pruned_synthesis_keeps_the_material(device, name):
     """The pruned mode on gallery exemplars at 24^3: fractions, grey spread and mirror kept,
@@ -257,6 +259,7 @@ def test_pruned_synthesis_keeps_the_material(device, name):
     assert abs(runs[0].astype(float).std() - ex.std()) < 0.15 * ex.std()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["porous50", "composite3"])  # composite3: the weighted distance
 def test_pruned_run_resumes_identically(tmp_path, device, name):
     from clsolid.gallery import gallery_exemplar
@@ -289,8 +292,8 @@ def test_bad_pruned_parameters_are_refused(bad):
         MLParams(**bad)
 
 
-@pytest.mark.parametrize("name, size, levels, want", [("porous50", 64, 32, "pruned"), ("brick", 64, 32, "exact"),
-                                                      ("brick", 64, 8, "exact"), ("gravel", 128, 32, "pruned")])
+@pytest.mark.parametrize("name, size, levels, want", slow_except([("porous50", 64, 32, "pruned"), ("brick", 64, 32, "exact"),
+                                                                  ("brick", 64, 8, "exact"), ("gravel", 128, 32, "pruned")], 0))
 def test_auto_prunes_categorical_and_large_grey_exemplars(device, name, size, levels, want):
     from clsolid.gallery import gallery_exemplar
 
@@ -449,6 +452,7 @@ def test_projected_candidates_need_squared_differences(small_labels):
         pruned.Pruning(build_scale(small_labels, SHAPE, params, 0), params)
 
 
+@pytest.mark.slow
 def test_projected_candidates_run_is_reproducible_and_tiles_alike(device):
     from clsolid.gallery import gallery_exemplar
 

@@ -75,6 +75,7 @@ def scale_starts(labels, shape, params, seed=5) -> list:
     return starts
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pyramid", ["binomial", "decimate"])
 def test_inserted_slices_show_each_scale_exemplar(brick_labels, pyramid):
     """+in: every scale starts with its own exemplar on the same slices (depths halved), trusted."""
@@ -109,6 +110,7 @@ def _shift_of(slice_, exemplar, step, cols):
     return None
 
 
+@pytest.mark.slow
 def test_staggered_slices_break_the_x_z_symmetry_consistently_across_scales(brick_labels):
     """Staggered +in: the views' slices at different depths, each with its own shift, the same at every scale
     (written whole, seams and all: the seam gap is the next test's)."""
@@ -234,6 +236,7 @@ def test_the_seam_gap_is_taken_where_the_exemplars_seam_shows():
     assert MLParams(seam_gap=3).for_exemplar(32, False, 9.0).seam_gap == 3  # given, kept
 
 
+@pytest.mark.slow
 def test_pieced_slices_are_mosaics_of_windows_the_same_at_every_scale():
     """insert_piece: each piece of a +in slice is its own exemplar window, the same one at every scale."""
     labels = np.arange(256).reshape(16, 16)  # every pixel its own label: a value says where it came from

@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import random_state
+from conftest import random_state, slow_except
 
 from clsolid import InputError
 from clsolid.balance import score_stride
@@ -33,7 +33,7 @@ CASES = [  # (relaxation, neighborhood, views, heuristic, shape, extra parameter
 ]
 
 
-@pytest.mark.parametrize("relaxation, k, views, heuristic, shape, extra", CASES)
+@pytest.mark.parametrize("relaxation, k, views, heuristic, shape, extra", slow_except(CASES, 0))
 def test_whole_run_matches_reference(device, small_labels, relaxation, k, views, heuristic, shape, extra):
     params = MLParams(neighborhood=k, views=views, heuristic=heuristic, scales=2, insert_slices=1,
                       relaxation=relaxation, balance=0.0, **extra)
@@ -44,7 +44,7 @@ def test_whole_run_matches_reference(device, small_labels, relaxation, k, views,
     assert [s["sweeps"] for s in got_t["scales"]] == [s["sweeps"] for s in ref_t["scales"]]
 
 
-@pytest.mark.parametrize("relaxation", ["icm", "gibbs", "annealing"])
+@pytest.mark.parametrize("relaxation", slow_except(["icm", "gibbs", "annealing"], 1))
 def test_balance_runs_alike(device, small_labels, relaxation):
     """With the balance, the device and the reference both end at the exemplar's label
     fractions, where the same run without it does not."""
@@ -118,7 +118,7 @@ def _run(device, labels, seed, relaxation, **backend):
     return run_ml(labels, (12, 16, 20), params, seed, CLBackend(device, **backend))[0]
 
 
-@pytest.mark.parametrize("relaxation", ["gibbs", "annealing"])
+@pytest.mark.parametrize("relaxation", slow_except(["gibbs", "annealing"], 0))
 def test_same_seed_same_volume_whatever_the_work_group(device, small_labels, relaxation):
     a = _run(device, small_labels, 3, relaxation)
     b = _run(device, small_labels, 3, relaxation, local_size=1, voxels_per_item=2, max_batch=97)

@@ -56,6 +56,7 @@ def test_coarse_levels_hold_exemplar_slices_and_the_finest_starts_them_from_nois
     assert _anchor(SearchParams(method="kopf", insert_spacing=0), fine, ex, 1, 5, shape) is None
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2])
 def test_anchors_keep_kopf_from_growing_its_own_mirror_image(seed):
     """Without anchors kopf settles into sheets along the x = z diagonal (both views' slices

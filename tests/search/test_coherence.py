@@ -6,6 +6,7 @@ from functools import partial
 
 import numpy as np
 import pytest
+from conftest import slow_except
 
 import clsolid
 from clsolid.phases import is_categorical
@@ -163,7 +164,7 @@ def test_the_kernel_searches_as_the_numpy_gathering_does(device, parent, spread_
         twins[0]._device._sent[0] = False  # the host's copy changed: the device's is sent again
 
 
-@pytest.mark.parametrize("method, scales", [("wl", 1), ("kopf", 1), ("chen-wang", 1), ("kopf", 2)])
+@pytest.mark.parametrize("method, scales", slow_except([("wl", 1), ("kopf", 1), ("chen-wang", 1), ("kopf", 2)], 2))
 def test_opencl_run_matches_the_reference(device, method, scales):
     """One scale: integer grey levels, float32 distances are exact, the blocks identical. Two:
     the coarser level's blurred values can tip near ties, and one tipped match changes the
@@ -182,6 +183,7 @@ def test_opencl_run_matches_the_reference(device, method, scales):
     assert agree >= 0.9, f"only {agree:.2%} of voxels agree with the float64 reference"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["wl", "kopf", "chen-wang"])
 def test_exact_passes_search_every_site_and_seed_the_candidates(device, method):
     """exact_passes = every pass: the exact search's block, bit for bit (the coherence state
@@ -223,6 +225,7 @@ def test_one_exact_pass_is_kopfs_default_on_grey_exemplars_only():
     assert resolved(method="wl", search="coherence") == 0 and resolved(method="chen-wang", search="coherence") == 0
 
 
+@pytest.mark.slow
 def test_the_coarser_levels_search_every_site(device):
     """coherence_levels=1 (kopf's default, as its coherence search): the coarser level is the exact search's, bit for bit,
     and the finest is not; coherence_levels=2 searches the coarser level among the candidates
@@ -275,6 +278,7 @@ def test_the_estimate_counts_each_levels_search():
     assert _report(exact, 2, 10, (4, 4, 4), 1.0, 0.0, img, vol).eta == pytest.approx(10 * 32 + 10 * 32 * 32)
 
 
+@pytest.mark.slow
 def test_coherence_matches_are_near_the_exhaustive_ones(device):
     """On a finished kopf block, each voxel's coherence match is never better than the
     exhaustive one (it searches a subset; its distances are summed in another order, so
@@ -306,6 +310,7 @@ def test_coherence_matches_are_near_the_exhaustive_ones(device):
     assert np.mean(np.sqrt(coh)) < 1.3 * np.mean(np.sqrt(exact)), (np.mean(np.sqrt(coh)), np.mean(np.sqrt(exact)))
 
 
+@pytest.mark.slow
 def test_synthesize_and_cli_take_the_search(tmp_path):
     import json
 
@@ -380,6 +385,7 @@ def test_phase_nearest_on_the_device_is_the_references(device):
     np.testing.assert_array_equal(phase_nearest(partial(CLMatcher, device), table, centres, w, 6), want)
 
 
+@pytest.mark.slow
 def test_a_minority_phase_survives_the_coherence_search(device):
     """composite4's 4.6 % phase: the neighbours' matches alone stop proposing it and it fell to
     0.8 % (seed 1, 48^3; kopf's balance chooses only among proposed phases); with each
@@ -417,6 +423,7 @@ def test_the_index_histogram_defaults_where_it_was_measured_better_and_is_checke
     assert SearchParams.from_dict(params.to_dict()) == params
 
 
+@pytest.mark.slow
 def test_synthesize_and_cli_take_the_index_histogram(tmp_path):
     import json
 
