@@ -182,11 +182,11 @@ def test_gallery_counts_targets_seed_by_seed(tool):
     assert "Seed by seed (1, 2):" in table
     assert "- mirror <= 0.1: 1/2 · 1/2\n" in table and "- patch <= 0.3: 2/2 · 1/2\n" in table
     assert "Seed by seed" not in gallery.markdown(rows, dict(settings, seeds=[1]), runs)
-    assert "2 pp" not in table  # issue 11's stricter targets are kopf's alone
+    assert "2 pp" not in table  # the stricter targets are kopf's alone
 
 
 def test_gallery_counts_kopfs_own_targets(tool):
-    """`kopf` is also held to issue 11's targets: phases within 2 points, histogram <= 0.05."""
+    """`kopf` is also held to stricter targets: phases within 2 points, histogram <= 0.05."""
     gallery = tool("gallery")
     scores = {v: {key: None for key, _ in gallery.SCORES} for v in gallery.VIEWS}
     for v in gallery.VIEWS:

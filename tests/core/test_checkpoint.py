@@ -1,4 +1,4 @@
-"""Checkpoint and resume (issue 12, point 3): a resumed run gives the identical volume, and a
+"""Checkpoint and resume: a resumed run gives the identical volume, and a
 bad checkpoint gets a clear error, never a silent restart."""
 
 import hashlib

@@ -1,4 +1,4 @@
-"""Tiles (issue 12, point 2): the tile geometry, and a tiled run that gives the one-piece run's
+"""Tiles (docs/design.md#tiles): the tile geometry, and a tiled run that gives the one-piece run's
 volume voxel for voxel, with its memory checked per tile."""
 
 import os

@@ -1,4 +1,4 @@
-"""Dask (issue 12, point 4): the tiles of every set as tasks on two worker processes give the volume of
+"""Dask: the tiles of every set as tasks on two worker processes give the volume of
 the one-process tiled run and of the one-piece run, voxel for voxel."""
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""The pruned likelihood (issue 12, point 1): tables, kernels against the float64 reference,
+"""The pruned likelihood (docs/design.md#pruned-likelihood): tables, kernels against the float64 reference,
 and the exact sum where the pruned one cannot be trusted."""
 
 import numpy as np
@@ -292,8 +292,9 @@ def test_bad_pruned_parameters_are_refused(bad):
         MLParams(**bad)
 
 
-@pytest.mark.parametrize("name, size, levels, want", slow_except([("porous50", 64, 32, "pruned"), ("brick", 64, 32, "exact"),
-                                                                  ("brick", 64, 8, "exact"), ("gravel", 128, 32, "pruned")], 0))
+@pytest.mark.parametrize("name, size, levels, want", slow_except([
+    ("porous50", 64, 32, "pruned"), ("brick", 64, 32, "exact"), ("brick", 64, 8, "exact"),
+    ("gravel", 128, 32, "pruned")], 0))
 def test_auto_prunes_categorical_and_large_grey_exemplars(device, name, size, levels, want):
     from clsolid.gallery import gallery_exemplar
 

@@ -1,4 +1,4 @@
-"""The exemplar of each scale (thesis_spec §2.5) and the ``+in`` slices at every scale."""
+"""The exemplar of each scale (docs/design.md#pyramid) and the ``+in`` slices at every scale."""
 
 import numpy as np
 import pytest
@@ -139,7 +139,7 @@ def test_where_two_views_slices_cross_each_shows_at_every_other_crossing():
     """Front slice i and right slice j cross along a line in y: it shows the front slice's
     pixels where i + j is even, the right slice's where it is odd, so that every slice of
     either view keeps about half of its crossings (written in view order, the right view
-    took them all, and the front view's slices scored worse: docs/gallery.md). Aligned slices
+    took them all, and the front view's slices scored worse: docs/design.md#staggered-slices). Aligned slices
     (the published form) are written as before, the right view's last."""
     from clsolid.core.slices import insert_slices
 

@@ -85,7 +85,7 @@ def test_opencl_run_matches_the_reference(device, name, scales, least):
     """One scale: whole grey levels, float32 distances exact, the same volume. Two: the coarser
     level's blurred values hold ties in exact arithmetic (composite3's three phases above all)
     that float32 sums break either way, each an equally good match, and a broken tie changes
-    the voxels chosen after it: 95.6 % agreed on PoCL on a Zen 4, 99.5 % on Intel's runtime."""
+    the voxels chosen after it: 90 % must agree."""
     ex = gallery_exemplar(name, 64)[:32, :32].astype(np.float64)
     params = SearchParams(method="chen-wang", neighborhood=5, scales=scales, iterations=2, candidates=7)
     ref = run_search(ex, (10, 12, 14), params, 3, ReferenceMatcher)
