@@ -1,11 +1,12 @@
 """Shared fixtures: every OpenCL test runs on one device, or on every device that compiles.
 
 By default the ``device`` fixture is one device: PoCL where it compiles (the CPU device the
-project is specified on), else the first that compiles; the tests that compare runtimes use
-every one (:data:`ALL_DEVICE_SPECS`). ``CLSOLID_TEST_DEVICES=all`` runs every OpenCL test on
-every device that compiles (where PoCL and Intel's CPU runtime both do, that doubles the
-suite's time). Filter devices with ``PYOPENCL_TEST`` (a substring of the platform or
-device name). With no device: fail when ``$CI`` is set, skip locally with the reason.
+project is specified on), else the first that compiles. A test marked ``each_device`` (the
+kernels against their float64 references) runs on every device that compiles, in the
+default run too: where PoCL and Intel's CPU runtime both do, on both. ``CLSOLID_TEST_DEVICES=all``
+runs every OpenCL test on every device that compiles (that doubles the suite's time). Filter
+devices with ``PYOPENCL_TEST`` (a substring of the platform or device name). With no device:
+fail when ``$CI`` is set, skip locally with the reason.
 """
 
 from __future__ import annotations
@@ -53,9 +54,17 @@ ALL_DEVICE_SPECS = _device_specs()
 DEVICE_SPECS = ALL_DEVICE_SPECS if os.environ.get("CLSOLID_TEST_DEVICES", "").lower() == "all" else ALL_DEVICE_SPECS[:1]
 
 
-@pytest.fixture(params=DEVICE_SPECS, scope="session")
+def pytest_generate_tests(metafunc):
+    """Give ``device`` its devices, as pyopencl's ``pytest_generate_tests_for_pyopencl`` does:
+    every one that compiles for a test marked ``each_device``, else :data:`DEVICE_SPECS`."""
+    if "device" in metafunc.fixturenames:
+        every = metafunc.definition.get_closest_marker("each_device") is not None
+        metafunc.parametrize("device", ALL_DEVICE_SPECS if every else DEVICE_SPECS, indirect=True, scope="session")
+
+
+@pytest.fixture(scope="session")
 def device(request):
-    """A :class:`clsolid.Device` for each visible OpenCL device (one per session)."""
+    """A :class:`clsolid.Device` for each device the test runs on (one per session)."""
     spec = request.param
     if spec.startswith("!"):
         if os.environ.get("CI"):
@@ -82,6 +91,15 @@ def small_labels(brick_labels):
     from clsolid.exemplar import quantise
 
     return quantise(brick_labels[:24, :24], 16)
+
+
+def slow_except(cases, *keep):
+    """*cases* for ``pytest.mark.parametrize``, each marked ``slow`` but those at the indices
+    *keep*: a large parametrization keeps a small representative case in the default run.
+    A tuple is one case's arguments, as parametrize reads it."""
+    slow = pytest.mark.slow
+    return [case if i in keep else pytest.param(*case if isinstance(case, tuple) else (case,), marks=slow)
+            for i, case in enumerate(cases)]
 
 
 def random_state(model, seed=0, cold=0.3):

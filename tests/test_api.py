@@ -126,6 +126,7 @@ def test_a_constant_exemplar_warns():
     assert (volume == 7).all()
 
 
+@pytest.mark.slow
 def test_memory_is_checked_before_allocating(device, monkeypatch):
     """A volume too large for the device's max buffer fails up front, naming the buffer."""
     monkeypatch.setattr(type(device), "max_alloc", property(lambda self: 1 << 20))

@@ -88,6 +88,7 @@ def test_score_lattice(shape):
         assert math.gcd(stride, shape[2]) == 1 and math.gcd(stride, shape[1]) == 1
 
 
+@pytest.mark.slow
 def test_a_run_keeps_the_exemplar_fractions(device):
     """Gibbs with the balance ends within a point of porous80 (about 20/80); without, it drifts."""
     img = gallery_exemplar("porous80", 64)
@@ -103,6 +104,7 @@ def test_a_run_keeps_the_exemplar_fractions(device):
     assert abs(got[0.0] - want) > abs(got[1.0] - want), got
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("kind", ["opencl", "tiled", "reference"])
 def test_the_balance_reads_a_sets_values_and_score_rows_as_the_whole_would_give(device, kind):
     """After every set the balance reads only that set's values and score rows (a gather on

@@ -1,7 +1,8 @@
-"""The documentation's references hold: every file under docs/ that the README, the docs and
-the code cite exists (and every design.md#anchor they cite is a heading there), every image
-a Markdown file shows is there, CI runs the README's test command, the docs name no tracker
-issues, and the generated command-line reference lists every option of the parser."""
+"""The documentation's references hold: every file under docs/ that the README, the docs,
+the code and the tests cite exists (and every design.md#anchor they cite is a heading there),
+every image a Markdown file shows is there, CI runs the README's test command, neither the
+docs nor the code, kernels and tests name tracker issues, and the generated command-line
+reference lists every option of the parser."""
 
 import argparse
 import importlib.util
@@ -13,11 +14,11 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
-#: A docs/ file named in prose or code: docs/name.md, docs/sub/name.png, docs/design.md#anchor.
+#: A docs/ file named in prose or code: docs/<name>.md, docs/<sub>/<name>.png, docs/design.md#<anchor>.
 CITED = re.compile(r"docs/([\w./\-]+\.(?:md|png))(?:#([\w\-]+))?")
 #: An image shown in Markdown, ![alt](path), or in HTML, <img src="path">.
 SHOWN = re.compile(r"!\[[^\]]*\]\(([^)\s]+)\)|<img\s[^>]*src=\"([^\"]+)\"")
-#: A tracker item named in prose: "issue 10", "issues 10 and 11", "issue #12".
+#: A tracker item named in prose: "issue N", "issues N and M", "issue #N".
 TRACKER = re.compile(r"\bissues? #?\d+\b", re.IGNORECASE)
 #: Pages removed when their content moved into the site (design.md, benchmarks.md, gallery.md).
 RETIRED = {"choices.md", "performance.md"}
@@ -32,7 +33,9 @@ def _markdown() -> list[Path]:
 
 
 def _code() -> list[Path]:
-    return [*sorted((ROOT / "clsolid").rglob("*.py")), *sorted((ROOT / "tools").glob("*.py"))]
+    """The package, the tools and the tests."""
+    return [*sorted((ROOT / "clsolid").rglob("*.py")), *sorted((ROOT / "tools").glob("*.py")),
+            *sorted((ROOT / "tests").rglob("*.py"))]
 
 
 def _docs_text() -> list[Path]:
@@ -71,7 +74,7 @@ def test_every_docs_file_and_anchor_the_documentation_cites_exists():
     assert not broken, sorted(broken)
 
 
-def test_every_docs_file_and_anchor_the_code_cites_exists():
+def test_every_docs_file_and_anchor_the_code_and_tests_cite_exists():
     broken = _broken(_code(), skip=RETIRED)
     assert not broken, sorted(broken)
 
@@ -97,16 +100,36 @@ def test_the_patterns_find_what_the_readme_cites():
     assert _slug("Chen-Wang weights") == "chen-wang-weights" and _slug("## `clsolid synth`"[3:]) == "clsolid-synth"
 
 
-def test_ci_runs_the_readme_test_command():
-    command = (ROOT / ".ci" / "run").read_text(encoding="utf-8").strip().splitlines()[-1]
-    assert command in (ROOT / "README.md").read_text(encoding="utf-8")
+def test_ci_runs_the_readme_test_command_then_the_slow_tests():
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8").splitlines()
+    readme = (ROOT / "README.md").read_text(encoding="utf-8").splitlines()
+    command = next(line for line in readme if line.endswith("python -m pytest"))
+    assert command in ci and ci.index(command) < ci.index("python -m pytest -m slow")
 
 
-def test_the_docs_name_no_tracker_issues():
-    assert TRACKER.search("as issue 10 asks") and TRACKER.search("Issue #12") and TRACKER.search("issues 10")
+#: Where no tracker item may be named, each with the files read there.
+TRACKED = {
+    "docs": _docs_text,
+    "clsolid": lambda: sorted(p for p in (ROOT / "clsolid").rglob("*") if p.suffix in (".py", ".toml")),
+    "kernels": lambda: sorted((ROOT / "kernels").rglob("*.cl")),
+    "tests": lambda: sorted((ROOT / "tests").rglob("*.py")),
+}
+
+
+def test_the_tracker_pattern_finds_issue_numbers():
+    # written so that this file names no tracker item itself
+    assert TRACKER.search(f"as issue {10} asks") and TRACKER.search(f"Issue #{12}") and TRACKER.search(f"issues {10}")
     assert not TRACKER.search("not an issue target")
+
+
+@pytest.mark.parametrize("tree", sorted(TRACKED))
+def test_no_tracker_issue_is_named(tree):
+    """The docs (README included), the code, the kernels and the tests say what a thing does,
+    not which tracker item asked for it."""
+    paths = TRACKED[tree]()
+    assert paths
     found = {f"{path.relative_to(ROOT)}:{text.count(chr(10), 0, m.start()) + 1}: {m.group(0)}"
-             for path in _docs_text() for text in [path.read_text(encoding="utf-8")]
+             for path in paths for text in [path.read_text(encoding="utf-8")]
              for m in TRACKER.finditer(text)}
     assert not found, sorted(found)
 

@@ -25,7 +25,7 @@ MEASURED = {
     "channels": {0: 30.0, 255: 70.0},
     "lamellae": {0: 49.5, 255: 50.5},
 }
-#: The issue's ranges: (name, phase value, lowest %, highest %).
+#: The ranges asked of the gallery's materials: (name, phase value, lowest %, highest %).
 REQUIRED = [("porous50", 0, 45, 55), ("porous80", 255, 75, 85), ("inclusions", 255, 0.5, 5)]
 
 
@@ -34,7 +34,7 @@ def images():
     return {(n, s): gallery_exemplar(n, s) for n in NAMES for s in SIZES}
 
 
-def test_the_gallery_covers_the_issue():
+def test_the_gallery_covers_every_kind_of_exemplar():
     assert len(NAMES) >= 14 and len(set(NAMES)) == len(NAMES)
     assert {"brick", "grass", "gravel", "hrtem", "lamellae", "channels", "grains", "inclusions"} <= set(NAMES)
     kinds = {n: gallery_info(n).kind for n in NAMES}
@@ -74,7 +74,7 @@ def test_phase_fractions_are_the_measured_ones(name, images):
 
 
 @pytest.mark.parametrize("name, value, lo, hi", REQUIRED)
-def test_phase_fractions_meet_the_issue(name, value, lo, hi, images):
+def test_phase_fractions_are_in_the_asked_ranges(name, value, lo, hi, images):
     for size in SIZES:
         assert lo < 100 * np.mean(images[name, size] == value) <= hi
 

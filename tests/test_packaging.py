@@ -5,6 +5,8 @@ import sys
 import zipfile
 from pathlib import Path
 
+import pytest
+
 import clsolid
 from clsolid.core import programs
 from clsolid.ml.opencl import SOURCES
@@ -18,6 +20,7 @@ def test_kernel_loader_finds_the_sources():
         assert programs.read_source(name).startswith(f'#line 1 "kernels/{name}"')
 
 
+@pytest.mark.slow  # builds a wheel with pip (seconds); the loader's source layout is checked above
 def test_wheel_contains_the_kernels(tmp_path):
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q",
                     "-w", str(tmp_path), str(ROOT)], check=True)

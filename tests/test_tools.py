@@ -3,6 +3,7 @@
 import pytest
 
 
+@pytest.mark.slow
 def test_bench_ml_runs_with_tuning(capsys, device, tool):
     tool("bench_ml").main(["--case", "b", "--shape", "8", "8", "8", "--voxels-per-item", "2",
                             "--device", device.device.name.strip()[:8]])
@@ -37,6 +38,7 @@ def test_compare_devices_reports_each_pair(capsys, tool):
     assert "seed 1" in out and ("identical voxels" in out or "nothing to compare" in out)
 
 
+@pytest.mark.slow
 def test_gallery_writes_table_json_and_montage(capsys, device, tmp_path, tool):
     import json
 
@@ -64,6 +66,7 @@ def test_gallery_writes_table_json_and_montage(capsys, device, tmp_path, tool):
     assert height >= 2 * 128 and width >= 4 * 128
 
 
+@pytest.mark.slow
 def test_bench_search_runs(capsys, device, tool):
     tool("bench_search").main(["--neighborhood", "3", "--queries", "64", "--reference-queries", "8",
                                 "--shape", "8", "--iterations", "1", "--device", device.device.name.strip()[:8]])
@@ -112,6 +115,7 @@ def test_prune_check_tool_compares_the_pruned_lcpdf(capsys, tool):
     assert "nearest 9999: TV 0.000 (99 %: 0.000), same level 100.0%" in out  # more than the sites: the exact sum
 
 
+@pytest.mark.slow
 def test_prune_check_pca_with_every_axis_finds_the_nearest_sites(capsys, tool):
     # all 24 axes of a 5x5 window: the projected distance is the distance (fall-off weights
     # included), so its nearest 16 give the exact sum's; one axis does not
@@ -122,6 +126,7 @@ def test_prune_check_pca_with_every_axis_finds_the_nearest_sites(capsys, tool):
     assert "view 1, PCA  1, nearest   16: TV 0.000" not in out and "view 1, nearest   16: TV 0.000" in out
 
 
+@pytest.mark.slow
 def test_prune_error_reports_every_sweep(capsys, device, tool):
     tool("prune_error").main(["--names", "porous50", "--shape", "12", "--sample", "20", "--set", "scales=2",
                               "--device", device.device.name.strip()[:8]])
@@ -129,6 +134,7 @@ def test_prune_error_reports_every_sweep(capsys, device, tool):
     assert "porous50:" in out and "pruned" in out and "scale 0 sweep 1:" in out
 
 
+@pytest.mark.slow
 def test_prune_error_measures_projected_candidates(capsys, device, tool):
     # more candidates than sites: the projected set is every site, so the exact sum
     tool("prune_error").main(["--names", "gravel", "--shape", "12", "--sample", "20", "--set", "scales=2",
@@ -138,6 +144,7 @@ def test_prune_error_measures_projected_candidates(capsys, device, tool):
     assert "gravel:" in out and "PCA: TV 0.0000 (99 %: 0.000), same mode 100.0%" in out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scratch", [False, True], ids=["in-memory", "scratch"])
 def test_bench_scale_prints_a_row_per_run(capsys, device, tool, scratch, tmp_path):
     bench = tool("bench_scale")
@@ -152,6 +159,7 @@ def test_bench_scale_prints_a_row_per_run(capsys, device, tool, scratch, tmp_pat
             bench.main(["--scratch", str(tmp_path)])  # needs --tile
 
 
+@pytest.mark.slow
 def test_bench_scale_runs_tiles_alone_and_says_every_sweep(capsys, device, tool):
     bench = tool("bench_scale")
     bench.main(["--cases", "64:8", "--names", "porous50", "--likelihoods", "pruned", "--tile", "5", "--tiled-only",
@@ -185,11 +193,11 @@ def test_gallery_counts_targets_seed_by_seed(tool):
     assert "Seed by seed (1, 2):" in table
     assert "- mirror <= 0.1: 1/2 · 1/2\n" in table and "- patch <= 0.3: 2/2 · 1/2\n" in table
     assert "Seed by seed" not in gallery.markdown(rows, dict(settings, seeds=[1]), runs)
-    assert "2 pp" not in table  # issue 11's stricter targets are kopf's alone
+    assert "2 pp" not in table  # the stricter targets are kopf's alone
 
 
 def test_gallery_counts_kopfs_own_targets(tool):
-    """`kopf` is also held to issue 11's targets: phases within 2 points, histogram <= 0.05."""
+    """`kopf` is also held to stricter targets: phases within 2 points, histogram <= 0.05."""
     gallery = tool("gallery")
     scores = {v: {key: None for key, _ in gallery.SCORES} for v in gallery.VIEWS}
     for v in gallery.VIEWS:
@@ -285,6 +293,7 @@ def test_mirror_noise_places_a_gallery_run_in_the_spread(capsys, tmp_path, tool)
     assert "| grains | " in out and "| 0.50 (+" in out and out.rstrip().endswith("| – |")
 
 
+@pytest.mark.slow
 def test_photo_windows_stay_inside_the_photograph_and_are_scored(capsys, tool):
     import numpy as np
 
@@ -303,6 +312,7 @@ def test_photo_windows_stay_inside_the_photograph_and_are_scored(capsys, tool):
     assert abs(float(rows[0][5])) < 1.0 and abs(float(rows[1][6])) < 1.0  # gravel's patch, tissue's autocorrelation
 
 
+@pytest.mark.slow
 def test_material_windows_of_a_generated_exemplar_come_from_new_draws(capsys, tool):
     from clsolid.gallery import gallery_draw, gallery_exemplar
 

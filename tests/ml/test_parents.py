@@ -79,6 +79,7 @@ def test_parent_terms_add_their_weighted_distance(small_labels, distance, fallof
         np.testing.assert_allclose(got, want, rtol=1e-6)  # weighted: float32 costs
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("kw", [
     dict(distance="squared"), dict(distance="weighted"), dict(distance="squared", falloff=2.0),
     dict(distance="squared", views=3, parent_weight=1.0),
@@ -119,6 +120,7 @@ def test_bad_parent_weight_is_refused(bad):
         MLParams(parent_weight=bad)
 
 
+@pytest.mark.slow
 def test_runs_with_parent_terms_are_reproducible_and_tiles_change_nothing(tmp_path, device, small_labels):
     kw = dict(neighborhood=5, scales=2, parent_weight=4.0, parent_min_side=0, rng=3, device=device, output="labels")
     a = clsolid.synthesize(small_labels, (12, 12, 12), **kw)
@@ -130,6 +132,7 @@ def test_runs_with_parent_terms_are_reproducible_and_tiles_change_nothing(tmp_pa
     assert (a != plain).mean() > 0.1
 
 
+@pytest.mark.slow
 def test_cli_gives_ml_its_parent_weight_and_the_sidecar_records_it(tmp_path, device):
     import json
 

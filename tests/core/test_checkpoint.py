@@ -1,4 +1,4 @@
-"""Checkpoint and resume (issue 12, point 3): a resumed run gives the identical volume, and a
+"""Checkpoint and resume: a resumed run gives the identical volume, and a
 bad checkpoint gets a clear error, never a silent restart."""
 
 import hashlib
@@ -7,6 +7,7 @@ import zipfile
 
 import numpy as np
 import pytest
+from conftest import slow_except
 
 import clsolid
 from clsolid.cli import EXIT_USAGE, main
@@ -37,7 +38,7 @@ def _interrupted(tmp_path, device, after: int, **kw) -> tuple[np.ndarray, object
     return tmp_path / "ck"
 
 
-@pytest.mark.parametrize("after", [1, 3, 6])
+@pytest.mark.parametrize("after", slow_except([1, 3, 6], 2))
 def test_resumed_run_is_identical_to_the_uninterrupted_one(tmp_path, device, after):
     whole = clsolid.synthesize("gravel", SHAPE, device=device, **KW)
     folder = _interrupted(tmp_path, device, after)
@@ -51,13 +52,14 @@ def test_resumed_run_is_identical_to_the_uninterrupted_one(tmp_path, device, aft
     np.testing.assert_array_equal(clsolid.resume(folder, device=device), whole)  # a finished run: its volume
 
 
-@pytest.mark.parametrize("relaxation", ["icm", "annealing"])
+@pytest.mark.parametrize("relaxation", slow_except(["icm", "annealing"], 0))
 def test_every_relaxation_resumes_identically(tmp_path, device, relaxation):
     whole = clsolid.synthesize("gravel", SHAPE, device=device, relaxation=relaxation, **KW)
     folder = _interrupted(tmp_path, device, 2, relaxation=relaxation)
     np.testing.assert_array_equal(clsolid.resume(folder, device=device), whole)
 
 
+@pytest.mark.slow
 def test_a_run_with_parent_terms_resumes_identically_midway_through_a_finer_scale(tmp_path, device):
     """The checkpoint keeps the scale's parent block (the coarser result repeated): a run
     stopped after the finest scale's first sweep goes on to the uninterrupted run's volume."""
@@ -70,6 +72,7 @@ def test_a_run_with_parent_terms_resumes_identically_midway_through_a_finer_scal
     np.testing.assert_array_equal(clsolid.resume(folder, device=device), whole.volume)
 
 
+@pytest.mark.slow
 def test_reference_back_end_resumes_identically(tmp_path):
     kw = dict(KW, scales=1, max_sweeps=3)
     whole = clsolid.synthesize("gravel", (6, 6, 6), device="reference", **kw)

@@ -47,6 +47,7 @@ def test_the_reference_is_the_nearest_site_on_the_components_measured_on_every_t
     assert (dist >= least * (1 - 1e-6)).all() and np.mean(site == exact) >= 0.5
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("parent", [False, True])
 def test_the_device_projects_and_searches_as_the_reference(device, parent):
     """Queries gathered and projected on the device (float32) against NumPy's gathers and
@@ -68,6 +69,7 @@ def test_the_device_projects_and_searches_as_the_reference(device, parent):
         np.testing.assert_allclose(got_dist[same], want_dist[same], rtol=1e-6)
 
 
+@pytest.mark.slow
 def test_seed_components_change_only_the_seeding_passes(device):
     """0: the exhaustive seeding pass (every pass exhaustive = the exact search, bit for
     bit). 16 on a grey exemplar: another block, as near the exemplar; on the float64

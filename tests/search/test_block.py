@@ -12,6 +12,9 @@ from clsolid.search.features import centre_weights, exemplar_features, voxel_fea
 from clsolid.search.match import CLMatcher
 from clsolid.search.pyramid import gaussian_pyramid
 
+# Every test here that takes a device checks a kernel against the reference: on every device.
+pytestmark = pytest.mark.each_device
+
 
 @pytest.mark.parametrize("parent, centre", [(False, False), (True, False), (True, True)])
 def test_the_device_gathers_the_queries_numpy_gathers(device, parent, centre):

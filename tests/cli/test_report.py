@@ -134,6 +134,7 @@ def test_plot_report(report, tmp_path):
     assert (tmp_path / "r.png").read_bytes()[:8] == PNG_MAGIC
 
 
+@pytest.mark.slow
 def test_plot_report_with_phase_curves(tmp_path):
     pytest.importorskip("matplotlib")
     from clsolid.metrics import evaluate

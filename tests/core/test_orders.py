@@ -69,6 +69,7 @@ def driver_matcher(table, mismatch=0):
     return ReferenceMatcher(table, mismatch=mismatch)
 
 
+@pytest.mark.slow
 def test_sequential_order_runs_and_is_refused_with_the_overlap_rule(device):
     ex = gallery_exemplar("porous80", 64)
     a = clsolid.synthesize(ex, (8, 8, 8), method="kopf", order="morton", scales=2, iterations=2, rng=1,
@@ -89,6 +90,7 @@ def test_causal_weights_keep_only_what_a_raster_has_visited():
     assert centre_weights(5, False, centre=False).sum() == 24
 
 
+@pytest.mark.slow
 def test_causal_raster_run(monkeypatch, device):
     from clsolid.search import features
 

@@ -24,6 +24,7 @@ def test_numpy_philox_vectorises():
     assert philox4x32(ctrs, keys).tolist() == [k[2] for k in KAT]
 
 
+@pytest.mark.each_device
 def test_kernel_philox_matches_known_answers(device):
     import pyopencl as cl
 
@@ -51,6 +52,7 @@ def test_kernel_philox_matches_known_answers(device):
     assert out.tolist() == [k[2] for k in KAT]
 
 
+@pytest.mark.each_device
 def test_init_kernel_matches_numpy(device):
     from clsolid.ml.opencl import CLBackend
     from clsolid.ml.reference import ReferenceBackend

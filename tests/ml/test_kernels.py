@@ -22,6 +22,7 @@ def _pair(device, labels_img, shape, vol, temp, **kw):
     return model, cl_b, ref
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("k, views, distance, falloff, shared", [
     (3, 2, "squared", 0, 1), (5, 3, "squared", 0, 1), (7, 2, "squared", 0, 1), (11, 2, "squared", 0, 1),
     (5, 3, "mismatch", 0, 1), (11, 2, "mismatch", 0, 1), (5, 3, "weighted", 0, 1), (11, 2, "weighted", 0, 1),
@@ -40,6 +41,7 @@ def test_per_label_log_lcpdf_matches_reference(device, small_labels, k, views, d
     np.testing.assert_allclose(got, want, atol=2e-3 * max(1.0, np.abs(want).max() / 100))
 
 
+@pytest.mark.each_device
 def test_no_underflow_for_11x11_and_256_levels(device):
     """Distances far beyond float32's exp range still give finite, exact log-LCPDFs."""
     rng = np.random.default_rng(5)
@@ -185,6 +187,7 @@ def test_group_tables_cover_every_site_once(small_labels):
         assert sorted(map(tuple, lanes)) == sorted(map(tuple, want))
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("heuristic, distance", [(h, "squared") for h in ("h2-product", "h2-min", "h2-max", "h1-lowest",
                                                                           "h1-highest", "h1-mean")]
                          + [("h2-product", "mismatch"), ("h1-lowest", "mismatch"), ("h2-product", "weighted")])

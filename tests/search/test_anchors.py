@@ -56,13 +56,14 @@ def test_coarse_levels_hold_exemplar_slices_and_the_finest_starts_them_from_nois
     assert _anchor(SearchParams(method="kopf", insert_spacing=0), fine, ex, 1, 5, shape) is None
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2])
 def test_anchors_keep_kopf_from_growing_its_own_mirror_image(seed):
     """Without anchors kopf settles into sheets along the x = z diagonal (both views' slices
-    then show the same 2D texture). porous50 at 24^3, seeds 1-4: mirror 0.30-0.51 without
-    anchors, -0.10-0.11 with the default's. lamellae is not tested here: a 24^3 block holds
-    too few of its bands for the anchors to decide (0.04-0.69 without, -0.01-0.49 with);
-    at 48^3 its mirror is a slow test (test_materials)."""
+    then show the same 2D texture; docs/design.md#anchor-slices): on porous50 at 24^3 the
+    mirror correlation is over 0.25 without them and under a third of that with the
+    default's. lamellae is not tested here: a 24^3 block holds too few of its bands for the
+    anchors to decide; its mirror at 48^3 is in tests/ml/test_materials.py."""
     ex = gallery_exemplar("porous50", 64)
     mirror = {}
     for spacing in (0, None):

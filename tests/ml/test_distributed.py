@@ -1,4 +1,4 @@
-"""Dask (issue 12, point 4): the tiles of every set as tasks on two worker processes give the volume of
+"""Dask: the tiles of every set as tasks on two worker processes give the volume of
 the one-process tiled run and of the one-piece run, voxel for voxel."""
 
 import numpy as np
@@ -34,10 +34,10 @@ def labels(brick_labels):
     return quantise(brick_labels[:16, :16], 8)
 
 
-# The exact sum's Dask run is slow-only (22 s): its tiles equal the one-piece run in
-# tests/test_tiles.py, and what Dask adds (sources to the workers and back) is the same for
-# both sums, checked by default on the pruned one.
-@pytest.mark.parametrize("likelihood", [pytest.param("exact", marks=pytest.mark.slow), "pruned"])
+# Whole runs on the workers are slow-only: each worker builds its kernels anew. The default run
+# keeps what is cheap there: the random start drawn on the workers, the options, a worker's error.
+@pytest.mark.slow
+@pytest.mark.parametrize("likelihood", ["exact", "pruned"])
 def test_distributed_run_is_the_one_process_run(device, client, labels, likelihood):
     """Gibbs with the balance (the defaults), exact and pruned: the sources go to the workers and back."""
     params = MLParams(neighborhood=5, scales=2, sweeps=2, likelihood=likelihood)
@@ -67,6 +67,7 @@ def test_the_workers_draw_the_random_start_a_run_at_a_time(device, client, monke
     np.testing.assert_array_equal(out, CLBackend(device).init_volume(SHAPE, 3, pixels))
 
 
+@pytest.mark.slow
 def test_synthesize_with_a_client(device, client):
     kw = dict(neighborhood=5, scales=2, rng=3, sweeps=1, device=device)
     gravel = builtin_exemplar("gravel", size=16)
@@ -127,6 +128,7 @@ def test_missing_dask_is_explained(monkeypatch):
         require_distributed()
 
 
+@pytest.mark.slow
 def test_cli_workers_flag(tmp_path, device):
     args = ["--shape", "12", "10", "14", "--neighborhood", "5", "--scales", "2", "--seed", "4", "--builtin-size",
             "16", "--max-sweeps", "3", "--device", device_spec(device), "-q"]

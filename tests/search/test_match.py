@@ -8,6 +8,9 @@ from clsolid import DeviceMemoryError, InputError
 from clsolid.search.match import (CLMatcher, best_match_reference, candidate_distances_reference,
                                   causal_weights, exemplar_table, k_nearest_reference, square_offsets)
 
+# Every test here that takes a device checks a kernel against the reference: on every device.
+pytestmark = pytest.mark.each_device
+
 
 def _exemplar(seed=0, shape=(24, 28), levels=256):
     return np.random.default_rng(seed).integers(0, levels, shape).astype(np.uint8)

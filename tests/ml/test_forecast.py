@@ -3,6 +3,7 @@ temperatures alone, against what the run then does."""
 
 import numpy as np
 import pytest
+from conftest import slow_except
 
 import clsolid
 from clsolid.gallery import gallery_exemplar
@@ -10,8 +11,8 @@ from clsolid.ml.forecast import forecast_visits
 from clsolid.ml.params import MLParams
 
 
-@pytest.mark.parametrize("options", [{}, {"relaxation": "icm"}, {"inherited": "fixed", "views": 3},
-                                     {"sweeps": 3}])
+@pytest.mark.parametrize("options", slow_except([{}, {"relaxation": "icm"}, {"inherited": "fixed", "views": 3},
+                                                 {"sweeps": 3}], 0))
 def test_forecast_replays_every_scales_sweeps_and_visits(device, monkeypatch, options):
     """The temperatures do not depend on the labels: the forecast made at a scale's start
     is the sweeps and visits the run then makes, and the ETA is 0 exactly at the end."""

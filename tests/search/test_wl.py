@@ -6,6 +6,7 @@ from functools import partial
 
 import numpy as np
 import pytest
+from conftest import slow_except
 
 from clsolid import InputError
 from clsolid.core.views import VIEW_AXES
@@ -72,7 +73,7 @@ def test_centre_weights():
     assert centre_weights(3, False, centre=True).tolist() == [1.0] * 9
 
 
-@pytest.mark.parametrize("views, k, parent", [(2, 5, True), (3, 3, True), (2, 3, False)])
+@pytest.mark.parametrize("views, k, parent", slow_except([(2, 5, True), (3, 3, True), (2, 3, False)], 2))
 def test_opencl_run_matches_the_reference(device, views, k, parent):
     ex = _exemplar(24)
     params = SearchParams(neighborhood=k, scales=2, iterations=2, views=views, parent=parent)
@@ -102,6 +103,7 @@ def test_inner_repetition_counts_its_searches():
     assert 2 * 512 * 2 < again["levels"][0]["searches"] <= 4 * 2 * 512 * 2
 
 
+@pytest.mark.slow
 def test_wl_grows_structure_from_noise(device):
     """porous80 (23 % pores): WL keeps some pores, in blobs (neighbours on different phases
     far rarer than in noise of the same fractions). From noise at every level (the
@@ -137,6 +139,7 @@ def test_too_many_levels_for_the_exemplar_is_an_input_error():
         run_wl(_exemplar(16), (16, 16, 16), SearchParams(neighborhood=7, scales=3), 1, ReferenceMatcher)
 
 
+@pytest.mark.slow
 def test_synthesize_runs_wl(device):
     import clsolid
 
@@ -149,6 +152,7 @@ def test_synthesize_runs_wl(device):
     assert res.params["levels"] == 32 and res.timings["levels"][-1]["level"] == 0
 
 
+@pytest.mark.slow
 def test_wl_with_specify_keeps_the_exemplars_values_and_dtype(device):
     import clsolid
 

@@ -100,6 +100,7 @@ def _traced_peak(side: int, device, options: dict) -> int:
         tracemalloc.stop()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("options, most", [
     ({"likelihood": "exact", "sweeps": 1}, 28),
     ({"likelihood": "exact", "sweeps": 1, "tile": 20}, 30),
@@ -108,17 +109,17 @@ def _traced_peak(side: int, device, options: dict) -> int:
 ])
 def test_the_drivers_hold_few_bytes_a_voxel(device, options, most, tmp_path, monkeypatch):
     """The growth of the traced peak from 32^3 to 56^3, per voxel (the exemplar's tables
-    cancel out). Whole-block index arrays (the conflict-free sets listed at once, a float64
-    copy of the state kept beside the back end's, int64 matches) cost 37, 39 and 116 bytes
-    a voxel before; what is left is the scale's start state and the output. The buffers
-    bounded in size (runs of planes, the balance's sampled scores) are held small here, so
-    that what they hold at these sizes does not pass for a cost per voxel (it did: 3 bytes)."""
+    cancel out): the scale's start state and the output, and no whole-block index arrays
+    (the conflict-free sets listed at once, a float64 copy of the state kept beside the back
+    end's, int64 matches; docs/design.md#host-memory). The buffers bounded in size (runs of
+    planes, the balance's sampled scores) are held small here, so that what they hold at
+    these sizes does not pass for a cost per voxel."""
     monkeypatch.setattr(scratch_module, "_RUN_ELEMENTS", 1 << 12)
     monkeypatch.setattr(ml_driver, "_INDEX_RUN", 1 << 12)
     monkeypatch.setattr(ml_balance, "SCORE_SAMPLES", 1 << 10)
     if "scratch" in options:  # the state and the result in files, which the system pages out
         options = {**options, "scratch": tmp_path}
-    small, large = 32, 56  # measured alike from 40^3 to 64^3 (within 0.4 bytes), in two thirds of the time
+    small, large = 32, 56  # the growth per voxel is the same as from 40^3 to 64^3, in less time
     _traced_peak(16, device, options)  # the first run in a process traces one-time allocations too (builds)
     growth = (_traced_peak(large, device, options) - _traced_peak(small, device, options)) / (large**3 - small**3)
     assert growth < most

@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import random_state
+from conftest import random_state, slow_except
 
 from clsolid import InputError
 from clsolid.balance import score_stride
@@ -33,7 +33,7 @@ CASES = [  # (relaxation, neighborhood, views, heuristic, shape, extra parameter
 ]
 
 
-@pytest.mark.parametrize("relaxation, k, views, heuristic, shape, extra", CASES)
+@pytest.mark.parametrize("relaxation, k, views, heuristic, shape, extra", slow_except(CASES, 0))
 def test_whole_run_matches_reference(device, small_labels, relaxation, k, views, heuristic, shape, extra):
     params = MLParams(neighborhood=k, views=views, heuristic=heuristic, scales=2, insert_slices=1,
                       relaxation=relaxation, balance=0.0, **extra)
@@ -44,7 +44,7 @@ def test_whole_run_matches_reference(device, small_labels, relaxation, k, views,
     assert [s["sweeps"] for s in got_t["scales"]] == [s["sweeps"] for s in ref_t["scales"]]
 
 
-@pytest.mark.parametrize("relaxation", ["icm", "gibbs", "annealing"])
+@pytest.mark.parametrize("relaxation", slow_except(["icm", "gibbs", "annealing"], 1))
 def test_balance_runs_alike(device, small_labels, relaxation):
     """With the balance, the device and the reference both end at the exemplar's label
     fractions, where the same run without it does not."""
@@ -58,7 +58,7 @@ def test_balance_runs_alike(device, small_labels, relaxation):
             vol = run_ml(small_labels, (12, 12, 12), params, 11, backend)[0]
             err[name, beta] = np.abs(label_fractions(vol, labels) - want).max()
     # Annealing's accept/reject is not a draw from the biased law the balance fits: it only
-    # halves the error there (4.5-4.8 points against 9.1 in this case).
+    # halves the error there, hence the looser bound.
     bound = 0.06 if relaxation == "annealing" else 0.02
     assert err["ref", 1.0] < bound and err["cl", 1.0] < bound, err
     assert min(err["ref", 0.0], err["cl", 0.0]) > 1.5 * max(err["ref", 1.0], err["cl", 1.0]), err
@@ -76,6 +76,7 @@ def _fragile(relaxation, code, logl, labels, x, words, t_in, bias, eps=1e-3, tri
     return out
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("relaxation", ["gibbs", "annealing"])
 @pytest.mark.parametrize("heuristic", ["h2-product", "h2-min", "h2-max", "h1-lowest", "h1-highest", "h1-mean"])
 def test_one_step_decides_as_the_reference(device, small_labels, relaxation, heuristic):
@@ -117,7 +118,7 @@ def _run(device, labels, seed, relaxation, **backend):
     return run_ml(labels, (12, 16, 20), params, seed, CLBackend(device, **backend))[0]
 
 
-@pytest.mark.parametrize("relaxation", ["gibbs", "annealing"])
+@pytest.mark.parametrize("relaxation", slow_except(["gibbs", "annealing"], 0))
 def test_same_seed_same_volume_whatever_the_work_group(device, small_labels, relaxation):
     a = _run(device, small_labels, 3, relaxation)
     b = _run(device, small_labels, 3, relaxation, local_size=1, voxels_per_item=2, max_batch=97)
@@ -126,6 +127,7 @@ def test_same_seed_same_volume_whatever_the_work_group(device, small_labels, rel
     assert np.mean(a != c) > 0.2  # stochastic relaxations keep the seeds apart
 
 
+@pytest.mark.each_device
 def test_gibbs_draws_follow_the_combined_lcpdf(device, small_labels):
     """Repeated Gibbs updates of one set on a fixed state: label frequencies match the
     normalised product of the views' LCPDFs (a pooled chi-square, loose bound)."""

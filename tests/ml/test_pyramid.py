@@ -1,4 +1,4 @@
-"""The exemplar of each scale (thesis_spec §2.5) and the ``+in`` slices at every scale."""
+"""The exemplar of each scale (docs/design.md#pyramid) and the ``+in`` slices at every scale."""
 
 import numpy as np
 import pytest
@@ -75,6 +75,7 @@ def scale_starts(labels, shape, params, seed=5) -> list:
     return starts
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pyramid", ["binomial", "decimate"])
 def test_inserted_slices_show_each_scale_exemplar(brick_labels, pyramid):
     """+in: every scale starts with its own exemplar on the same slices (depths halved), trusted."""
@@ -109,6 +110,7 @@ def _shift_of(slice_, exemplar, step, cols):
     return None
 
 
+@pytest.mark.slow
 def test_staggered_slices_break_the_x_z_symmetry_consistently_across_scales(brick_labels):
     """Staggered +in: the views' slices at different depths, each with its own shift, the same at every scale
     (written whole, seams and all: the seam gap is the next test's)."""
@@ -137,7 +139,7 @@ def test_where_two_views_slices_cross_each_shows_at_every_other_crossing():
     """Front slice i and right slice j cross along a line in y: it shows the front slice's
     pixels where i + j is even, the right slice's where it is odd, so that every slice of
     either view keeps about half of its crossings (written in view order, the right view
-    took them all, and the front view's slices scored worse: docs/gallery.md). Aligned slices
+    took them all, and the front view's slices scored worse: docs/design.md#staggered-slices). Aligned slices
     (the published form) are written as before, the right view's last."""
     from clsolid.core.slices import insert_slices
 
@@ -234,6 +236,7 @@ def test_the_seam_gap_is_taken_where_the_exemplars_seam_shows():
     assert MLParams(seam_gap=3).for_exemplar(32, False, 9.0).seam_gap == 3  # given, kept
 
 
+@pytest.mark.slow
 def test_pieced_slices_are_mosaics_of_windows_the_same_at_every_scale():
     """insert_piece: each piece of a +in slice is its own exemplar window, the same one at every scale."""
     labels = np.arange(256).reshape(16, 16)  # every pixel its own label: a value says where it came from

@@ -79,10 +79,12 @@ def test_probe_runs_once_then_comes_from_the_cache(fresh_probes, device, broken_
     assert dev.driver_version.strip() in probe.device_key(dev)
 
 
+@pytest.mark.slow
 def test_working_device_probes_ok(fresh_probes, device):
     assert probe.probe(device.device).ok and probe.probe(device.device).vector_width in probe.VECTOR_WIDTHS
 
 
+@pytest.mark.slow
 def test_a_width_that_breaks_the_compiler_falls_back_to_a_narrower_one(fresh_probes, device, monkeypatch):
     """As PoCL's LLVM 14 aborts on 16-wide vectors on a Zen 4 CPU, and handles 8."""
     import pyopencl as cl
@@ -108,6 +110,7 @@ def test_a_crashing_child_is_an_answer(monkeypatch, device):
     assert not result.ok and "crashed" in result.message and "physreg" in result.message
 
 
+@pytest.mark.slow
 def test_the_child_probe_runs_the_real_kernels(device):
     result = probe._in_child(device.device, probe.probe(device.device).vector_width)
     assert result.ok and result.vector_width == probe.probe(device.device).vector_width

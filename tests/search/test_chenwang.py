@@ -6,6 +6,7 @@ from functools import partial
 
 import numpy as np
 import pytest
+from conftest import slow_except
 
 import clsolid
 from clsolid.cli import main
@@ -63,6 +64,7 @@ def _levels_seen(monkeypatch):
     return seen
 
 
+@pytest.mark.slow
 def test_histograms_are_live_counts_of_the_current_choices(device, monkeypatch):
     seen = _levels_seen(monkeypatch)
     ex = gallery_exemplar("grains", 64)[:32, :32].astype(np.float64)
@@ -77,13 +79,13 @@ def test_histograms_are_live_counts_of_the_current_choices(device, monkeypatch):
     np.testing.assert_array_equal(out.volume.ravel(), seen[-1].centres[src.source])
 
 
-@pytest.mark.parametrize("name", ["composite3", "gravel"])
-@pytest.mark.parametrize("scales, least", [(1, 1.0), (2, 0.9)])
+@pytest.mark.parametrize("name", slow_except(["composite3", "gravel"], 1))
+@pytest.mark.parametrize("scales, least", slow_except([(1, 1.0), (2, 0.9)], 0))
 def test_opencl_run_matches_the_reference(device, name, scales, least):
     """One scale: whole grey levels, float32 distances exact, the same volume. Two: the coarser
     level's blurred values hold ties in exact arithmetic (composite3's three phases above all)
     that float32 sums break either way, each an equally good match, and a broken tie changes
-    the voxels chosen after it: 95.6 % agreed on PoCL on a Zen 4, 99.5 % on Intel's runtime."""
+    the voxels chosen after it: 90 % must agree."""
     ex = gallery_exemplar(name, 64)[:32, :32].astype(np.float64)
     params = SearchParams(method="chen-wang", neighborhood=5, scales=scales, iterations=2, candidates=7)
     ref = run_search(ex, (10, 12, 14), params, 3, ReferenceMatcher)
@@ -92,6 +94,7 @@ def test_opencl_run_matches_the_reference(device, name, scales, least):
     assert agree >= least, f"only {agree:.2%} of voxels agree with the float64 reference"
 
 
+@pytest.mark.slow
 def test_block_holds_only_exemplar_pixels_and_the_source_map_says_which(device):
     ex = gallery_exemplar("gravel", 64)
     res = clsolid.synthesize(ex, (16, 16, 16), method="chen-wang", iterations=2, rng=5, device=device,
@@ -107,6 +110,7 @@ def test_block_holds_only_exemplar_pixels_and_the_source_map_says_which(device):
                                   np.bincount(r * 64 + c, minlength=64 * 64).reshape(64, 64)[res.site_use >= 0])
 
 
+@pytest.mark.slow
 def test_same_seed_same_volume_and_another_seed_another(device):
     run = lambda seed: clsolid.synthesize("brick", (12, 12, 12), method="chen-wang", iterations=2, rng=seed,
                                           device=device)
@@ -114,6 +118,7 @@ def test_same_seed_same_volume_and_another_seed_another(device):
     assert np.array_equal(a, b) and not np.array_equal(a, c)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("search", ["exact", "coherence"])
 def test_a_set_gathered_in_chunks_gives_the_same_volume(device, monkeypatch, search):
     """The host gathers a large set's neighbourhoods a chunk at a time (memory); a view's
@@ -125,6 +130,7 @@ def test_a_set_gathered_in_chunks_gives_the_same_volume(device, monkeypatch, sea
     np.testing.assert_array_equal(run(), whole)
 
 
+@pytest.mark.slow
 def test_more_candidates_use_the_exemplar_more_evenly(device):
     """The thesis's Fig. 5.7: a larger candidate set gives a more uniform position histogram
     (porous50, 24^3: spread of the counts 16.4 with k = 1, 6.8 with k = 15)."""

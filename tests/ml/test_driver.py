@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from conftest import slow_except
 
 from clsolid.ml.opencl import CLBackend
 from clsolid.ml.params import MLParams
@@ -20,10 +21,10 @@ CASES = [  # (neighborhood, views, heuristic, shape, scales)
 ]
 
 
-@pytest.mark.parametrize("k, views, heuristic, shape, scales", CASES)
+@pytest.mark.parametrize("k, views, heuristic, shape, scales", slow_except(CASES, 6))
 def test_whole_run_matches_reference(device, small_labels, k, views, heuristic, shape, scales):
     # without the balance: its per-set fit turns float32's last bits into other biases
-    # (see tests/test_relaxation.py, test_balance_runs_alike)
+    # (see tests/ml/test_relaxation.py, test_balance_runs_alike)
     params = MLParams(neighborhood=k, views=views, heuristic=heuristic, scales=scales, insert_slices=1, balance=0.0)
     ref, ref_t, _ = run_ml(small_labels, shape, params, 11, ReferenceBackend())
     got, got_t, _ = run_ml(small_labels, shape, params, 11, CLBackend(device))
@@ -55,6 +56,7 @@ def _run(device, labels, seed, **backend):
     return run_ml(labels, (12, 16, 20), params, seed, CLBackend(device, **backend))[0]
 
 
+@pytest.mark.slow
 def test_same_seed_same_volume_whatever_the_work_group(device, small_labels):
     a = _run(device, small_labels, 3)
     b = _run(device, small_labels, 3, local_size=1, voxels_per_item=2, max_batch=97)
@@ -133,6 +135,7 @@ def test_exact_ties_go_to_the_lowest_label():
     assert decide(0, logl, labels).tolist() == [2.0]
 
 
+@pytest.mark.slow
 def test_large_window_whole_run_matches_reference(device, brick_labels):
     """13x13 (beyond the thesis's 11x11), where one-site views create many exact ties."""
     from clsolid.exemplar import quantise

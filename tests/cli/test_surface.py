@@ -7,6 +7,7 @@ import json
 
 import numpy as np
 import pytest
+from conftest import slow_except
 
 from clsolid.cli import build_parser, main
 from clsolid.cli.synth import ADVANCED_GROUPS, GROUPS, SOURCES
@@ -87,7 +88,7 @@ def test_a_missing_output_is_one_line(capsys):
 FAST = ["--shape", "6", "8", "10", "--neighborhood", "3", "--scales", "2", "--levels", "4", "--seed", "5", "-q"]
 
 
-@pytest.mark.parametrize("method", ["ml", "kopf"])
+@pytest.mark.parametrize("method", slow_except(["ml", "kopf"], 0))
 def test_a_sidecar_as_config_grows_the_same_volume(tmp_path, device, method):
     first = tmp_path / "first.npy"
     assert main(["synth", "brick", "-o", str(first), *FAST, "--method", method,

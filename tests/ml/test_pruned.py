@@ -1,8 +1,9 @@
-"""The pruned likelihood (issue 12, point 1): tables, kernels against the float64 reference,
+"""The pruned likelihood (docs/design.md#pruned-likelihood): tables, kernels against the float64 reference,
 and the exact sum where the pruned one cannot be trusted."""
 
 import numpy as np
 import pytest
+from conftest import slow_except
 
 import clsolid
 from clsolid.errors import DeviceMemoryError, InputError
@@ -106,6 +107,7 @@ def test_window_table_groups_identical_windows(small_labels):
     assert t.grid[0] * t.grid[1] == model.n_sites
 
 
+@pytest.mark.each_device
 def test_exact_kernel_records_the_nearest_site(device, small_labels):
     params, model = _model(small_labels, neighborhood=5)
     vol, temp, _ = _state(model)
@@ -121,6 +123,7 @@ def test_exact_kernel_records_the_nearest_site(device, small_labels):
     assert (cl_b.sources()[:, voxels] == ref.sources()[:, voxels]).mean() > 0.98
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("k, views, similar, sample, distance, falloff, projected",
                          # projected: axes, or (axes, lists probed)
                          [(3, 2, 1, 0, "squared", 0, 0), (5, 3, 8, 0, "squared", 0, 0), (7, 2, 16, 0, "squared", 0, 0),
@@ -151,6 +154,7 @@ def test_pruned_lcpdf_matches_reference(device, small_labels, k, views, similar,
     assert not np.allclose(want, exact.lcpdf(voxels), atol=1e-3)  # it is pruned: candidates, not every site
 
 
+@pytest.mark.each_device
 def test_a_sample_of_every_site_is_the_exact_sum(device, small_labels):
     params, model = _model(small_labels, neighborhood=5, likelihood="pruned", prune_sample=4096)
     vol, temp, sources = _state(model, seed=8)
@@ -175,6 +179,7 @@ def test_the_sample_follows_seed_and_sweep(small_labels):
         assert (other != a).any()
 
 
+@pytest.mark.each_device
 def test_pruned_sum_is_a_subset_of_the_exact_one(device, small_labels):
     """Unnormalised and without a sample, each label's pruned sum can only be below the exact one."""
     params, model = _model(small_labels, neighborhood=5, likelihood="pruned", prune_sample=0)
@@ -188,6 +193,7 @@ def test_pruned_sum_is_a_subset_of_the_exact_one(device, small_labels):
     assert np.any(got < want - 1e-2)
 
 
+@pytest.mark.each_device
 def test_hot_or_sourceless_voxels_get_the_exact_sum(device, small_labels):
     params, model = _model(small_labels, neighborhood=5, likelihood="pruned", prune_min_weight=0.3, prune_sample=0)
     vol, temp, sources = _state(model, seed=4)
@@ -218,6 +224,7 @@ def _nb(model, voxels, view):
     return wrapped_coords(voxels, model.shape, model.offsets[view])
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("distance", ["squared", "mismatch", "weighted"])
 def test_one_pruned_gibbs_sweep_matches_reference(device, small_labels, distance):
     params, model = _model(small_labels, neighborhood=5, likelihood="pruned", distance=distance)
@@ -233,6 +240,7 @@ def test_one_pruned_gibbs_sweep_matches_reference(device, small_labels, distance
     np.testing.assert_allclose(cl_b.temperature(), ref.temperature(), atol=1e-6)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["porous50", "composite3", "gravel"])
 def test_pruned_synthesis_keeps_the_material(device, name):
     """The pruned mode on gallery exemplars at 24^3: fractions, grey spread and mirror kept,
@@ -251,6 +259,7 @@ def test_pruned_synthesis_keeps_the_material(device, name):
     assert abs(runs[0].astype(float).std() - ex.std()) < 0.15 * ex.std()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["porous50", "composite3"])  # composite3: the weighted distance
 def test_pruned_run_resumes_identically(tmp_path, device, name):
     from clsolid.gallery import gallery_exemplar
@@ -283,8 +292,9 @@ def test_bad_pruned_parameters_are_refused(bad):
         MLParams(**bad)
 
 
-@pytest.mark.parametrize("name, size, levels, want", [("porous50", 64, 32, "pruned"), ("brick", 64, 32, "exact"),
-                                                      ("brick", 64, 8, "exact"), ("gravel", 128, 32, "pruned")])
+@pytest.mark.parametrize("name, size, levels, want", slow_except([
+    ("porous50", 64, 32, "pruned"), ("brick", 64, 32, "exact"), ("brick", 64, 8, "exact"),
+    ("gravel", 128, 32, "pruned")], 0))
 def test_auto_prunes_categorical_and_large_grey_exemplars(device, name, size, levels, want):
     from clsolid.gallery import gallery_exemplar
 
@@ -393,6 +403,7 @@ def test_projected_lists_probed_all_find_what_every_site_finds():
     np.testing.assert_allclose(one[near], whole.distances(model, vol, voxels, 1)[near])
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("probe", [0, 3])
 def test_projected_candidates_are_the_references(device, small_labels, probe):
     """The kernel's projected nearest windows (top K by the projected distance among the
@@ -413,6 +424,7 @@ def test_projected_candidates_are_the_references(device, small_labels, probe):
     assert (got >= 0).all()
 
 
+@pytest.mark.each_device
 @pytest.mark.parametrize("every", [0, 2])
 def test_projected_candidates_only_in_the_first_sweeps(device, small_labels, every):
     """With ``prune_projected_sweeps=N`` the sweeps after the first N of a scale take no
@@ -441,6 +453,7 @@ def test_projected_candidates_need_squared_differences(small_labels):
         pruned.Pruning(build_scale(small_labels, SHAPE, params, 0), params)
 
 
+@pytest.mark.slow
 def test_projected_candidates_run_is_reproducible_and_tiles_alike(device):
     from clsolid.gallery import gallery_exemplar
 

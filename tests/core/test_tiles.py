@@ -1,10 +1,11 @@
-"""Tiles (issue 12, point 2): the tile geometry, and a tiled run that gives the one-piece run's
+"""Tiles (docs/design.md#tiles): the tile geometry, and a tiled run that gives the one-piece run's
 volume voxel for voxel, with its memory checked per tile."""
 
 import os
 
 import numpy as np
 import pytest
+from conftest import slow_except
 
 import clsolid
 from clsolid.cli import EXIT_USAGE, main
@@ -111,7 +112,7 @@ def _params(case):
                     **{k: v for k, v in case.items() if k != "tile"})
 
 
-@pytest.mark.parametrize("case", CASES, ids=lambda c: "-".join(str(v) for v in c.values()))
+@pytest.mark.parametrize("case", slow_except(CASES, 3), ids=lambda c: "-".join(str(v) for v in c.values()))
 def test_tiled_run_is_the_one_piece_run(device, labels, case):
     params = _params(case)
     whole = CLBackend(device)
@@ -123,6 +124,7 @@ def test_tiled_run_is_the_one_piece_run(device, labels, case):
     assert (whole.exact_visits, whole.pruned_visits) == (tiles.exact_visits, tiles.pruned_visits)
 
 
+@pytest.mark.slow
 def test_a_halo_too_narrow_changes_the_volume(device, labels, monkeypatch):
     """The equality above is no accident of the tiles: one voxel less of halo and it is gone."""
     params = _params(CASES[2])
@@ -143,6 +145,7 @@ def test_random_start_in_runs_is_the_same(device, monkeypatch):
 # -- memory, options, CLI, checkpoints ----------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_memory_is_checked_per_tile(device, monkeypatch):
     """One piece does not fit a 1 MiB buffer limit: the error names the largest tile that does."""
     binary = (np.random.default_rng(2).random((16, 16)) > 0.5).astype(np.uint8)
@@ -169,6 +172,7 @@ def test_tile_option_is_checked(device):
         clsolid.synthesize("gravel", (8, 8, 8), backend={"tile": 4}, device="reference")
 
 
+@pytest.mark.slow
 def test_cli_tile_flag(tmp_path, device):
     args = ["--shape", "12", "10", "14", "--neighborhood", "5", "--scales", "2", "--seed", "4", "--builtin-size",
             "16", "--max-sweeps", "3", "-q"]
@@ -179,6 +183,7 @@ def test_cli_tile_flag(tmp_path, device):
     assert main(["synth", "gravel", "-o", str(tmp_path / "d.npy"), "--method", "wl", "--tile", "5", "-q"]) == EXIT_USAGE
 
 
+@pytest.mark.slow
 def test_tiled_checkpoint_resumes_identically(tmp_path, device, monkeypatch):
     """A tiled run's checkpoint holds the whole arrays: it resumes, tiled, to the one-piece volume."""
     kw = dict(neighborhood=5, scales=2, rng=4, sweeps=3, likelihood="pruned", device=device)
@@ -209,6 +214,7 @@ def test_tiled_checkpoint_resumes_identically(tmp_path, device, monkeypatch):
     assert list((tmp_path / "scratch").iterdir()) == []
 
 
+@pytest.mark.slow
 def test_region_order_is_a_visiting_order_the_tiles_keep(device, tmp_path, monkeypatch):
     """region=N visits each region's sets before the next region's: another sequential order, so
     another volume than the set-by-set sweep, but the same one in tiles (of any edge), on disk,
@@ -239,6 +245,7 @@ def test_region_order_is_a_visiting_order_the_tiles_keep(device, tmp_path, monke
 # -- the state on disk (scratch) -----------------------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", [CASES[1], CASES[4]], ids=["icm-pruned-3views", "annealing-exact"])
 def test_state_on_disk_gives_the_same_volume(device, labels, case, tmp_path):
     """The whole-block arrays as memory-mapped files: the one-piece run's volume, and the
@@ -257,6 +264,7 @@ def test_state_on_disk_gives_the_same_volume(device, labels, case, tmp_path):
     assert os.listdir(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_scratch_through_the_api_and_the_cli(device, tmp_path):
     kw = dict(neighborhood=5, scales=2, rng=4, sweeps=2, device=device)
     whole = clsolid.synthesize(GRAVEL16, (12, 10, 14), **kw)
@@ -312,6 +320,7 @@ def test_scratch_arrays(tmp_path, monkeypatch):
     assert os.listdir(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_the_host_check_counts_what_stays_in_memory(device, tmp_path, monkeypatch):
     kw = dict(neighborhood=5, scales=2, rng=4, sweeps=1, device=device)
     shape = (12, 10, 14)
