@@ -190,8 +190,13 @@ def _resolve(spec: str | None):
     return max(working, key=_score)
 
 
+#: Each device opened once a process: its context, queue and the programs built on it serve
+#: every later run (a build costs up to seconds; docs/benchmarks.md).
+_OPENED: dict[int, Device] = {}
+
+
 def select_device(spec: "str | Device | None" = None) -> Device:
-    """Choose an OpenCL device and create its context and queue.
+    """Choose an OpenCL device and open its context and queue (once a process).
 
     Parameters
     ----------
@@ -206,6 +211,8 @@ def select_device(spec: "str | Device | None" = None) -> Device:
     Returns
     -------
     Device
+        The same object for the same device throughout the process, so that the programs
+        built for one run serve the next.
 
     Raises
     ------
@@ -226,5 +233,8 @@ def select_device(spec: "str | Device | None" = None) -> Device:
     if spec is None:
         spec = os.environ.get("CLSOLID_DEVICE") or os.environ.get("PYOPENCL_CTX")
     dev = _resolve(spec)
-    ctx = cl.Context([dev])
-    return Device(device=dev, context=ctx, queue=cl.CommandQueue(ctx))
+    opened = _OPENED.get(dev.int_ptr)
+    if opened is None:
+        ctx = cl.Context([dev])
+        opened = _OPENED[dev.int_ptr] = Device(device=dev, context=ctx, queue=cl.CommandQueue(ctx))
+    return opened

@@ -3,7 +3,7 @@ neighbourhood below the coarsest scale, as tables, as the reference's distance, 
 
 import numpy as np
 import pytest
-from conftest import random_state
+from conftest import random_state, slow_except
 
 import clsolid
 from clsolid.errors import InputError
@@ -80,12 +80,12 @@ def test_parent_terms_add_their_weighted_distance(small_labels, distance, fallof
 
 
 @pytest.mark.each_device
-@pytest.mark.parametrize("kw", [
+@pytest.mark.parametrize("kw", slow_except([
     dict(distance="squared"), dict(distance="weighted"), dict(distance="squared", falloff=2.0),
     dict(distance="squared", views=3, parent_weight=1.0),
     dict(distance="weighted", likelihood="pruned", prune_similar=8, prune_sample=17),
     dict(distance="squared", likelihood="pruned", prune_similar=4, prune_sample=0, prune_projected=8,
-         prune_projected_k=20)])
+         prune_projected_k=20)], 1, 3, 4, 5))
 def test_kernels_match_the_reference_with_parent_terms(device, small_labels, kw):
     params = MLParams(**{"neighborhood": 5, "scales": 2, "parent_weight": 4.0, "parent_min_side": 0, **kw})
     model = build_scale(small_labels, SHAPE, params, 0)
