@@ -64,6 +64,25 @@ def as_volume(volume: Any, name: str = "volume", *, min_side: int = 2) -> np.nda
     return arr
 
 
+def as_image_or_volume(data: Any, name: str) -> np.ndarray:
+    """A finite, real, non-empty 2D image or 3D ``(Z, Y, X)`` volume; the dtype is kept."""
+    arr = np.asarray(data)
+    if arr.ndim not in (2, 3) or arr.size == 0:
+        raise InputError(f"{name} must be a non-empty 2D image or 3D (Z, Y, X) volume, got shape {arr.shape}")
+    _check_dtype(arr, name)
+    if arr.dtype.kind == "f" and not np.isfinite(arr).all():
+        raise InputError(f"{name} contains NaN or infinite values")
+    return arr
+
+
+def neighbour_pairs(ndim: int, axis: int) -> tuple[tuple, tuple]:
+    """Indices of the first and the second element of every pair of neighbours along ``axis``
+    of an ``ndim``-D array (``a[lo]`` and ``a[hi]`` line up pair by pair)."""
+    lo, hi = [slice(None)] * ndim, [slice(None)] * ndim
+    lo[axis], hi[axis] = slice(None, -1), slice(1, None)
+    return tuple(lo), tuple(hi)
+
+
 def _check_dtype(arr: np.ndarray, name: str) -> None:
     if arr.dtype.kind not in "biuf":
         raise InputError(f"{name} must hold real numbers, got dtype {arr.dtype}")
