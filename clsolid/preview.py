@@ -1,4 +1,5 @@
-"""A labelled one-image preview of a synthesis: the exemplar beside a front, right and top slice."""
+"""A labelled one-image preview of a synthesis: the exemplar beside a front, right and top slice,
+and the block behind those slices drawn as a cube."""
 
 from __future__ import annotations
 
@@ -83,6 +84,154 @@ def _depths(volume: np.ndarray, depths: dict[str, int] | None) -> dict[str, int]
     return out
 
 
+#: Default obliqueness of :func:`render_cube`: depth drawn at half scale, at 45 degrees (cabinet).
+CUBE_DEPTH, CUBE_ANGLE = 0.5, 45.0
+#: Default shading of :func:`render_cube`: the top face this much lighter, the right face darker.
+CUBE_SHADE = 0.2
+
+
+def _cube_faces(volume: np.ndarray, corner: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The visible faces of the block ``volume[z:, y:, :x + 1]``, corner ``(z, y, x)``, as the views
+    orient them: front (rows y, columns x), top (rows z, columns x), right (rows y, columns z)."""
+    z, y, x = corner
+    block = volume[z:, y:, : x + 1]
+    return view_slice(block, "front", 0), view_slice(block, "top", 0), view_slice(block, "right", x)
+
+
+def _check_corner(volume: np.ndarray, corner: Any) -> tuple[int, int, int]:
+    if corner is None:
+        return 0, 0, volume.shape[2] - 1
+    try:
+        ok = len(corner) == 3 and all(not isinstance(c, bool) and isinstance(c, (int, np.integer)) and 0 <= c < n
+                                      for c, n in zip(corner, volume.shape))
+    except TypeError:
+        ok = False
+    if not ok:
+        raise InputError(f"corner={corner!r} must be three voxel indices (z, y, x) inside the volume {volume.shape}")
+    return int(corner[0]), int(corner[1]), int(corner[2])
+
+
+def _check_cube_options(depth: Any, angle: Any, shade: Any, min_side: Any) -> None:
+    ranges = (("depth", depth, lambda v: 0.0 < v <= 2.0, "in (0, 2]"),
+              ("angle", angle, lambda v: 0.0 < v < 90.0, "in (0, 90) degrees"),
+              ("shade", shade, lambda v: 0.0 <= v < 1.0, "in [0, 1)"))
+    for name, value, inside, what in ranges:
+        if not (_is_number(value) and inside(value)):
+            raise InputError(f"{name}={value!r} must be a number {what}")
+    if isinstance(min_side, bool) or not isinstance(min_side, (int, np.integer)) or min_side < 1:
+        raise InputError(f"min_side={min_side!r} must be an integer >= 1")
+
+
+def _is_number(value: Any) -> bool:
+    return not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating)) \
+        and bool(np.isfinite(value))
+
+
+def _draw_cube(front: np.ndarray, top: np.ndarray, right: np.ndarray, scale: int, depth: float, angle: float,
+               shade: float, edges: bool) -> np.ndarray:
+    """The three uint8 faces (as :func:`_cube_faces` gives them) in an oblique projection.
+
+    A voxel ``(z, y, x)`` of the block is drawn at ``(x + z d cos a, y - z d sin a)`` (columns
+    right, rows down; d = *depth*, a = *angle*) times *scale* pixels. Each pixel samples the face
+    its centre falls on, inverting that shear (nearest neighbour), so the front face is an exact
+    ``scale`` x ``scale`` enlargement.
+    """
+    H, W = front.shape
+    D = top.shape[0]
+    du, dv = depth * np.cos(np.radians(angle)), depth * np.sin(np.radians(angle))
+    # The front face starts on a whole pixel row, below the back edge's rise.
+    rise = math.ceil(D * dv * scale)
+    out = np.full((rise + H * scale + 1, math.ceil((W + D * du) * scale) + 1), 255, np.uint8)
+    v, u = np.mgrid[: out.shape[0], : out.shape[1]]
+    u = (u + 0.5) / scale
+    v = (v + 0.5 - rise) / scale  # voxel units, origin at the front face's top-left corner
+    lighter = np.round(top + (255.0 - top) * shade).astype(np.uint8)
+    darker = np.round(right * (1.0 - shade)).astype(np.uint8)
+
+    on = (u < W) & (v >= 0) & (v < H)
+    out[on] = front[v[on].astype(int), u[on].astype(int)]
+    z, x = -v / dv, u + v * du / dv  # the top face (y = 0): v = -z dv, u = x + z du
+    on = (v < 0) & (z < D) & (x >= 0) & (x < W)
+    out[on] = lighter[z[on].astype(int), x[on].astype(int)]
+    z = (u - W) / du  # the right face (x = W): u = W + z du, v = y - z dv
+    y = v + z * dv
+    on = (u >= W) & (z < D) & (y >= 0) & (y < H)
+    out[on] = darker[y[on].astype(int), z[on].astype(int)]
+
+    if edges:
+        back = (D * du, -D * dv)
+        corners = {"tl": (0.0, 0.0), "tr": (float(W), 0.0), "br": (float(W), float(H)), "bl": (0.0, float(H))}
+        far = {k: (cu + back[0], cv + back[1]) for k, (cu, cv) in corners.items()}
+        segments = [(corners[a], corners[b]) for a, b in (("tl", "tr"), ("tr", "br"), ("br", "bl"), ("bl", "tl"))]
+        segments += [(corners[k], far[k]) for k in ("tl", "tr", "br")]
+        segments += [(far["tl"], far["tr"]), (far["tr"], far["br"])]
+        for (u0, v0), (u1, v1) in segments:
+            n = 2 * int(np.ceil(max(abs(u1 - u0), abs(v1 - v0)) * scale)) + 1  # half-pixel steps leave no gap
+            t = np.linspace(0.0, 1.0, n)
+            cols = np.clip(np.floor((u0 + t * (u1 - u0)) * scale).astype(int), 0, out.shape[1] - 1)
+            rows = np.clip(np.floor((v0 + t * (v1 - v0)) * scale).astype(int) + rise, 0, out.shape[0] - 1)
+            out[rows, cols] = 0
+    return out
+
+
+def _cube_scale(shape: tuple[int, ...], depth: float, angle: float, min_side: int) -> int:
+    """The smallest integer pixels per voxel giving the drawn cube a long side >= *min_side*."""
+    D, H, W = shape
+    extent = max(W + D * depth * np.cos(np.radians(angle)), H + D * depth * np.sin(np.radians(angle)))
+    return max(1, math.ceil(min_side / extent))
+
+
+def render_cube(volume: np.ndarray, *, corner: tuple[int, int, int] | None = None,
+                min_side: int = PREVIEW_MIN_SIDE, depth: float = CUBE_DEPTH, angle: float = CUBE_ANGLE,
+                shade: float = CUBE_SHADE, edges: bool = True) -> np.ndarray:
+    """The volume drawn as a cube: its front, top and right faces in an oblique projection.
+
+    Parameters
+    ----------
+    volume : numpy.ndarray
+        ``(Z, Y, X)`` volume, grey levels or phase labels of any real dtype.
+    corner : (int, int, int) or None
+        ``(z, y, x)``: draw the block ``volume[z:, y:, :x + 1]``, whose visible faces are the
+        slices ``volume[z]``, ``volume[:, y, :]`` and ``volume[:, :, x]``. None: the whole
+        volume, faces ``volume[0]``, ``volume[:, 0, :]`` and ``volume[:, :, -1]``.
+    min_side : int, default PREVIEW_MIN_SIDE
+        Smallest long side of the image; voxels are enlarged by the smallest integer factor
+        that reaches it.
+    depth : float, default 0.5
+        Drawn length of a voxel along z, in voxels (0.5: a cabinet projection), in (0, 2].
+    angle : float, default 45.0
+        Angle of the z axis above the horizontal, degrees, in (0, 90).
+    shade : float, default 0.2
+        The top face is blended this far towards white and the right face towards black, so
+        that the edges read; 0 draws the faces' grey levels as they are.
+    edges : bool, default True
+        Draw the cube's nine visible edges in black, one pixel wide.
+
+    Returns
+    -------
+    numpy.ndarray
+        2D uint8 grey image on a white background. The faces share one linear grey scale,
+        their joint minimum black and maximum white.
+
+    Notes
+    -----
+    The viewer looks along +z from above and to the right, as the views are oriented: the
+    front face shows rows y (down) and columns x (right) as the front slice does; the top
+    face ``y = 0`` recedes up and to the right with z; the right face ``x = X - 1`` shows
+    rows y and, receding to the right, z, as the right slice does. Each pixel samples the
+    face its centre falls on (nearest neighbour).
+    """
+    vol = _check_volume(volume)
+    if vol.dtype.kind == "f" and not np.isfinite(vol).all():
+        raise InputError("volume contains NaN or infinite values; replace them before drawing")
+    c = _check_corner(vol, corner)
+    _check_cube_options(depth, angle, shade, min_side)
+    faces = grey8(list(_cube_faces(vol, c)))
+    block = (vol.shape[0] - c[0], vol.shape[1] - c[1], c[2] + 1)
+    return _draw_cube(*faces, _cube_scale(block, depth, angle, min_side), float(depth), float(angle),
+                      float(shade), bool(edges))
+
+
 @dataclass
 class Preview:
     """A rendered preview: the grey image, each panel's box ``(x, y, width, height)`` and caption."""
@@ -94,10 +243,11 @@ class Preview:
 
 def render_preview(exemplar: np.ndarray, volume: np.ndarray, *, depths: dict[str, int] | None = None,
                    constrained: Sequence[str] = ("front", "right"), name: str = "exemplar",
-                   min_side: int = PREVIEW_MIN_SIDE) -> Preview:
+                   min_side: int = PREVIEW_MIN_SIDE, cube: bool = True) -> Preview:
     """Lay out the labelled preview of :func:`save_preview` without writing it.
 
-    *name* starts the exemplar's caption; *min_side* is the smallest long side of a panel.
+    *name* starts the exemplar's caption; *min_side* is the smallest long side of a panel;
+    *cube* adds the last panel, :func:`render_cube` of the block behind the three slices.
     """
     ex, vol = _check_inputs(exemplar, volume)
     chosen = _depths(vol, depths)
@@ -107,7 +257,15 @@ def render_preview(exemplar: np.ndarray, volume: np.ndarray, *, depths: dict[str
         raw.append(view_slice(vol, view, chosen[view]))
         mark = ", constrained" if view in constrained else ""
         captions.append(f"{view} {_AXIS_LETTER[axis]}={chosen[view]}{mark}")
-    panels = [enlarge(panel, min_side) for panel in grey8(raw)]
+    # The cube's faces are the slices shown (cut to the block), so they need no grey scale of their own.
+    corner = (chosen["front"], chosen["top"], chosen["right"])
+    scaled = grey8(raw + list(_cube_faces(vol, corner)) if cube else raw)
+    panels = [enlarge(panel, min_side) for panel in scaled[: len(raw)]]
+    if cube:
+        block = (vol.shape[0] - corner[0], vol.shape[1] - corner[1], corner[2] + 1)
+        scale = _cube_scale(block, CUBE_DEPTH, CUBE_ANGLE, min_side)
+        panels.append(_draw_cube(*scaled[len(raw):], scale, CUBE_DEPTH, CUBE_ANGLE, CUBE_SHADE, True))
+        captions.append(f"block z>={corner[0]} y>={corner[1]} x<={corner[2]}")
     font = _font()
     measure = ImageDraw.Draw(Image.new("L", (1, 1)))
     widths = [max(panel.shape[1], int(measure.textlength(c, font=font)) + 4) for panel, c in zip(panels, captions)]
@@ -126,7 +284,8 @@ def render_preview(exemplar: np.ndarray, volume: np.ndarray, *, depths: dict[str
 def save_preview(path: PathLike, exemplar: np.ndarray, volume: np.ndarray, *,
                  depths: dict[str, int] | None = None,
                  constrained: Sequence[str] = ("front", "right")) -> pathlib.Path:
-    """Save the exemplar beside a front, right and top slice of the volume as one labelled PNG.
+    """Save the exemplar beside a front, right and top slice of the volume, and the block
+    behind those slices drawn as a cube, as one labelled PNG.
 
     Parameters
     ----------
@@ -152,7 +311,10 @@ def save_preview(path: PathLike, exemplar: np.ndarray, volume: np.ndarray, *,
     ``volume[:, :, x].T`` (rows y, columns z) and ``volume[:, y, :]`` (rows z,
     columns x), all through one grey scale (the joint minimum black, maximum white).
     Each is enlarged by an integer nearest-neighbour factor to a long side of at least
-    :data:`PREVIEW_MIN_SIDE` pixels, under a caption naming it and its slice index.
+    :data:`PREVIEW_MIN_SIDE` pixels, under a caption naming it and its slice index. The
+    last panel is :func:`render_cube` of the block ``volume[z:, y:, :x + 1]`` at those
+    slices' indices: its front, top and right faces are (the block's part of) the three
+    slices, in the same grey scale, with the top face lighter and the right face darker.
     """
     p = _as_path(path, "path")
     _suffix(p, "path", (".png",))

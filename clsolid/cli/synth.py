@@ -121,8 +121,9 @@ class SynthCommand:
     seed: int | None = option(None, "random seed", group=_E, check=Int(0), none="a fresh one, recorded in the sidecar")
     device: str | None = option(None, "OpenCL device: '0:1', a name ('pocl', 'H100'), cpu, gpu or 'reference'",
                                 group=_E, check=Anything("a device"), none="$CLSOLID_DEVICE, $PYOPENCL_CTX or the best")
-    preview: Path | None = option(None, "PNG of the exemplar beside a front, right and top slice", group=_E,
-                                  check=_path("a .png file"), metavar="PNG", none="none")
+    preview: Path | None = option(None, "PNG of the exemplar beside a front, right and top slice, and the block "
+                                  "behind them drawn as a cube", group=_E, check=_path("a .png file"),
+                                  metavar="PNG", none="none")
     config: Path | None = option(None, "settings from a TOML file or a run's sidecar JSON (flags given override "
                                  "them)", group=_E, check=_path("a .toml or .json file"), metavar="FILE", none="none")
     quiet: bool = option(False, "no progress on stderr", group=_E, check=Flag(), short="-q")
