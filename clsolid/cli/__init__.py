@@ -1,4 +1,4 @@
-"""The ``clsolid`` command: ``synth``, ``devices`` and ``evaluate``.
+"""The ``clsolid`` command: ``synth``, ``devices``, ``evaluate`` and ``validate``.
 
 Exit statuses, one table for every subcommand (:data:`clsolid.errors.EXIT_CODES`): each
 error class carries its own, so a refusal reads the same from any command.
@@ -23,6 +23,7 @@ from ..errors import (
 )
 from .evaluate import add_evaluate, run_evaluate
 from .synth import add_synth, run_synth
+from .validate import add_validate, run_validate
 
 EXIT_OK, EXIT_FAIL = 0, 1
 EXIT_USAGE, EXIT_NO_DEVICE = InputError.exit_code, NoDeviceError.exit_code
@@ -61,6 +62,7 @@ def build_parser(show_all: bool = False) -> argparse.ArgumentParser:
     add_synth(sub, show_all)
     sub.add_parser("devices", help="list OpenCL devices", description="List every OpenCL device clsolid can use.")
     add_evaluate(sub)
+    add_validate(sub)
     return parser
 
 
@@ -103,6 +105,8 @@ def main(argv: list[str] | None = None) -> int:
                 return run_synth(args)
             if command == "devices":
                 return run_devices()
+            if command == "validate":
+                return run_validate(argparse.Namespace(**args))
             return run_evaluate(argparse.Namespace(**args))
     except ClsolidError as exc:
         if debug:

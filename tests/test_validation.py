@@ -1,0 +1,62 @@
+"""Validation against a real 3D volume: a section in, volumes out, 3D properties compared."""
+
+import json
+
+import numpy as np
+import pytest
+
+from clsolid.errors import InputError
+from clsolid.groundtruth import ground_truth
+from clsolid.validation import format_validation, plot_validation, segment, validate
+
+SMALL = dict(neighborhood=3, scales=2)
+
+
+def test_the_report_holds_every_phase_and_property_beside_the_real_band(device):
+    real = ground_truth("iso3", 32, seed=0)
+    report = validate(real, n=2, shape=(16, 16, 16), device=device, **SMALL)
+    assert report["band_count"] == 8 and report["generated"]["seeds"] == [0, 1]
+    assert set(report["phases"]) == {"0", "1", "2"} and len(report["volumes"]) == 2
+    for key, rows in report["phases"].items():
+        real_fraction = float(np.mean(real == int(key)))
+        assert rows["fraction"]["real"] == pytest.approx(real_fraction)
+        # the generator keeps its exemplar's phases: the section's fraction, give or take a slice's spread
+        section_fraction = float(np.mean(real[16] == int(key)))
+        assert abs(rows["fraction"]["generated"] - section_fraction) < 0.1
+        assert len(rows["s2"]["error"]) == 3 and len(rows["connected"]["real"]) == 3
+        assert ("tortuosity" in rows) == (real_fraction > 0.25)
+    json.dumps(report, allow_nan=False)  # JSON as it stands
+    table = format_validation(report)
+    assert all(f"phase {k}" in table for k in "012") and "S2 along z" in table and "tortuosity x" in table
+
+
+def test_a_grey_real_volume_is_cut_at_its_own_levels_and_so_are_the_grown_ones(device):
+    rng = np.random.default_rng(0)
+    grey = ground_truth("iso2", 32, seed=1) * 100.0 + rng.normal(0, 10, (32, 32, 32))
+    labels, thresholds = segment(grey, 2)
+    assert len(thresholds) == 1 and 20 < thresholds[0] < 80 and set(np.unique(labels)) == {0, 1}
+    report = validate(grey, n=1, shape=(16, 16, 16), device=device, tortuosity=False, **SMALL)
+    assert report["real"]["thresholds"] == pytest.approx(thresholds)
+    assert set(report["phases"]) == {"0", "1"} and "tortuosity" not in report["phases"]["0"]
+    assert "grey levels cut at" in format_validation(report)
+
+
+def test_a_segmented_real_volume_keeps_its_values():
+    labels = ground_truth("iso2", 32, seed=0) * 255
+    same, thresholds = segment(labels, 2)
+    assert thresholds is None and same is labels
+
+
+def test_the_plot_shows_s2_per_axis(tmp_path, device):
+    pytest.importorskip("matplotlib")
+    report = validate(ground_truth("iso2", 32, seed=0), n=1, shape=(16, 16, 16), device=device, tortuosity=False,
+                      **SMALL)
+    plot_validation(report, tmp_path / "s2.png")
+    assert (tmp_path / "s2.png").stat().st_size > 1000
+
+
+@pytest.mark.parametrize("kw, match", [(dict(n=0), "n=0"), (dict(shape=(16, 16)), "three sides"),
+                                       (dict(shape=(16, 16, 64)), "does not fit"), (dict(classes=1), "classes=1")])
+def test_bad_arguments_are_refused_before_anything_grows(kw, match):
+    with pytest.raises(InputError, match=match):
+        validate(ground_truth("iso2", 32, seed=0), device="reference", **kw)
