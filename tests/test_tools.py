@@ -1,5 +1,7 @@
 """The scripts in tools/ run (at toy sizes; their figures are not checked here)."""
 
+import json
+
 import pytest
 
 
@@ -330,3 +332,13 @@ def test_material_windows_of_a_generated_exemplar_come_from_new_draws(capsys, to
     photo_windows.main(["--names", "porous50", "--size", "64", "--sides", "24", "--seeds", "1"])
     row = capsys.readouterr().out.splitlines()[-1].split("|")
     assert row[1].strip() == "porous50" and abs(float(row[5])) < 0.5 and abs(float(row[8])) < 0.5  # patch, C2 near 0
+
+
+@pytest.mark.slow
+def test_validate_truths_tool_tables_each_truth_method_and_phase(tmp_path, capsys, tool, device):
+    tool("validate_truths").main(["--names", "iso2", "--methods", "kopf", "--side", "32", "-n", "1",
+                                  "--device", device.device.name.strip()[:8], "-o", str(tmp_path)])
+    table = (tmp_path / "validation.md").read_text()
+    assert table.count("| iso2 | kopf |") == 2 and "S2 error z / y / x" in table
+    report = json.loads((tmp_path / "iso2-kopf.json").read_text())
+    assert report["real"]["ground_truth"]["side"] == 32 and report["generated"]["shape"] == [16, 16, 16]
