@@ -2,6 +2,7 @@
 
 import json
 
+import numpy as np
 import pytest
 
 
@@ -171,6 +172,24 @@ def test_bench_scale_runs_tiles_alone_and_says_every_sweep(capsys, device, tool)
     assert "scale 1/" in captured.err and "visits" in captured.err
     with pytest.raises(SystemExit):
         bench.main(["--tiled-only"])  # needs --tile
+
+
+def test_gallery_isolated_share_is_over_the_exemplars_of_at_least_one_pixel(tool):
+    """A clean exemplar has no isolated pixel: its share counts as one pixel's, so a volume
+    with one isolated voxel in 64 against a 64-pixel exemplar scores 1; grey levels count a
+    voxel unlike every neighbour by more than the exemplar's steps."""
+    from types import SimpleNamespace
+
+    isolated = tool("gallery").isolated
+    exemplar = np.zeros((8, 8), np.uint8)
+    exemplar[:, 4:] = 1
+    volume = np.zeros((4, 4, 4), np.uint8)
+    volume[1, 1, 1] = 1
+    res = SimpleNamespace(labels=volume, exemplar_labels=exemplar, exemplar=exemplar, volume=volume)
+    assert isolated(res, True) == {"volume": 1 / 64, "exemplar": 0.0, "ratio": 1.0}
+    grey = SimpleNamespace(exemplar=np.add.outer(np.arange(8.0), np.arange(8.0)), volume=np.zeros((4, 4, 4)))
+    grey.volume[1, 1, 1] = 100.0
+    assert isolated(grey, False) == {"volume": 1 / 64, "exemplar": 0.0, "ratio": 1.0}
 
 
 def test_gallery_counts_targets_seed_by_seed(tool):

@@ -7,7 +7,8 @@ the front, right and top views (0: as close as two halves of the exemplar, 1: no
 correlation (x <-> z with 2 views; every pair of axes with 3), the stretch (how much taller
 than wide the features are in the constrained views, against the exemplar; the y axis the
 two views share makes them tall), the largest fraction of any slice identical to a shifted
-window of the exemplar, and the time. Writes, in OUTDIR:
+window of the exemplar, the share of isolated voxels (no face neighbour alike) over the
+exemplar's share of isolated pixels, and the time. Writes, in OUTDIR:
 gallery.md (a table and how many exemplars meet each target), gallery.json (every
 number) and montage.png (each exemplar beside a front, right and top slice taken away
 from the +in slices). With several seeds every cell shows the worst seed, and the targets
@@ -97,6 +98,22 @@ def copy_chance(exemplar: np.ndarray, side: int) -> float:
     return float(metrics.match_counts(window, exemplar[:half]).max() / window[0].size)
 
 
+def isolated(res: Any, categorical: bool) -> dict[str, float]:
+    """The share of isolated voxels of a result's volume (labels none of the 6 face neighbours
+    shares; grey: unlike every one by more than the exemplar's steps,
+    :func:`clsolid.metrics.isolated_contrast_fraction`), the exemplar's share of isolated pixels
+    (4 neighbours), and their ratio. The exemplar counts at least one pixel: a clean one has none,
+    and a ratio to 0 would say nothing of how speckled the volume is."""
+    if categorical:
+        vol, ex = level_indices(res)
+        in_volume, in_exemplar = metrics.isolated_fraction(vol), metrics.isolated_fraction(ex)
+    else:  # the exemplar as the engine saw it (level means), like the volume
+        in_volume = metrics.isolated_contrast_fraction(res.volume, res.exemplar)
+        in_exemplar = metrics.isolated_contrast_fraction(res.exemplar, res.exemplar)
+    return {"volume": in_volume, "exemplar": in_exemplar,
+            "ratio": in_volume / max(in_exemplar, 1.0 / np.size(res.exemplar))}
+
+
 def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
     """Every number of the gallery for one synthesis result (phase fractions if ``categorical``)."""
     params = res.params
@@ -121,6 +138,7 @@ def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
         "copy": {"fraction": copy.fraction, "view": copy.view, "index": copy.index, "shift": list(copy.shift),
                  "inserted": bool(copy.index in slices[copy.view]), "chance": copy_chance(ex, min(vol.shape))},
         "inserted_depths": {v: d.tolist() for v, d in slices.items()},
+        "isolated": isolated(res, categorical),
         "phase_error_pp": None, "fractions": None,
     }
     if categorical:
@@ -173,6 +191,7 @@ def summarise(runs: list[dict]) -> dict[str, Any]:
         "mirror_chance": first["mirror_chance"],
         "stretch": _farthest_from_one([r.get("stretch_max") for r in runs]),  # gallery.json before it: None
         "copy": max((r["copy"] for r in runs), key=lambda c: c["fraction"]),
+        "isolated": _worst([r.get("isolated", {}).get("ratio") for r in runs]),  # gallery.json before it: None
         "seconds": float(np.mean([r["seconds"] for r in runs])),
         "constrained": first["constrained"],
     }
@@ -230,14 +249,16 @@ def markdown(rows: dict[str, dict], settings: dict, runs: dict[str, list[dict]] 
         "close to its mirror voxel). Stretch: in the constrained view where it is farthest from 1, "
         "the features' height-to-width ratio (correlation lengths along y and across) over the "
         "exemplar's: above 1, taller than the exemplar's; ∞: longer along y than half the volume's "
-        "side. Copy: largest fraction of a slice equal to a shifted exemplar window, with the slice "
+        "side. Isolated: the volume's share of voxels no face neighbour is like (the same phase; grey: "
+        "within the exemplar's 99th-percentile step) over the exemplar's share of such pixels, counted as at "
+        "least one pixel. Copy: largest fraction of a slice equal to a shifted exemplar window, with the slice "
         "(view and depth; +in: an inserted slice) and, in "
         "brackets, its chance level: a window of the exemplar's lower half against its upper half."
         + (" Each cell is the worst seed; time is the mean." if len(settings["seeds"]) > 1 else ""),
         "",
         "| exemplar | kind | phase err | " + " | ".join(f"{title} F/R/T" for _, title in SCORES)
-        + " | mirror | stretch | copy | time (s) |",
-        "|---" * (7 + len(SCORES)) + "|",
+        + " | mirror | stretch | isolated | copy | time (s) |",
+        "|---" * (8 + len(SCORES)) + "|",
     ]
     for name, row in rows.items():
         info = gallery_info(name)
@@ -247,7 +268,8 @@ def markdown(rows: dict[str, dict], settings: dict, runs: dict[str, list[dict]] 
         copy = (f"{c['fraction']:.2f} {c['view'][0].upper()}{c['index']}{' +in' if c['inserted'] else ''} "
                 f"({c['chance']:.2f})")
         lines.append(f"| {name} | {kind} | {_fmt(row['phase_error_pp'], 1)} | " + " | ".join(cells)
-                     + f" | {_fmt(row['mirror'])} ({_fmt(row['mirror_chance'])}) | {_fmt(row['stretch'])} | {copy} "
+                     + f" | {_fmt(row['mirror'])} ({_fmt(row['mirror_chance'])}) | {_fmt(row['stretch'])} | "
+                     f"{_fmt(row.get('isolated'), 1)} | {copy} "
                      f"| {row['seconds']:.1f} |")
     lines += ["", "Targets met (scores in the constrained views"
               + ("; every exemplar's worst seed):" if len(settings["seeds"]) > 1 else "):"), ""]
@@ -375,7 +397,7 @@ def main(argv: list[str] | None = None) -> int:
             c = run["copy"]
             print(f"{name} seed {seed}: {run['seconds']:.1f} s synthesis, {time.perf_counter() - t:.1f} s in all; "
                   f"phase err {_fmt(run['phase_error_pp'], 1)} pp, mirror {_fmt(run['mirror_max'])}, "
-                  f"stretch {_fmt(run['stretch_max'])}, "
+                  f"stretch {_fmt(run['stretch_max'])}, isolated {_fmt(run['isolated']['ratio'], 1)}x, "
                   f"copy {c['fraction']:.2f} ({c['view']} {c['index']})", file=sys.stderr, flush=True)
     write_report(args.outdir, settings, runs)
     montage(args.outdir / "montage.png", rows_for_montage)

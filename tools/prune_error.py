@@ -51,8 +51,8 @@ class _Probe(CLBackend):
         self.pruning = pruned.Pruning(model, params)
         self.projected = None if self.pca is None else pruned.ProjectedWindows.of(model, self.pca[0], self.probe)
 
-    def start_sweep(self, seed, tag, t_in, bias) -> None:
-        super().start_sweep(seed, tag, t_in, bias)
+    def start_sweep(self, seed, tag, t_in, bias, relaxation=None) -> None:
+        super().start_sweep(seed, tag, t_in, bias, relaxation)
         self.fresh = tag != self.tag
         self.seed = seed
         if self.fresh:

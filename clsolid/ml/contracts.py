@@ -76,8 +76,9 @@ class Backend(Protocol):
                     sources: np.ndarray | None = None, parent: np.ndarray | None = None) -> None:
         """Take a scale's tables and its start state."""
 
-    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
-        """The arguments of the sweep's sets (random stream, global temperature, balance bias)."""
+    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray, relaxation: str | None = None) -> None:
+        """The arguments of the sweep's sets (random stream, global temperature, balance bias,
+        and the relaxation where it is not the run's: ``"icm"`` in a polish sweep)."""
 
     def update(self, voxels: np.ndarray) -> None:
         """Relax one conflict-free set of voxels (flat indices)."""
@@ -119,7 +120,7 @@ class TileRunner(Protocol):
     def load_scale(self, model: ScaleModel, params: MLParams, block: tuple[int, int, int]) -> None:
         """Take a scale's tables, with buffers for tiles of *block* voxels."""
 
-    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
+    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray, relaxation: str | None = None) -> None:
         """As :meth:`Backend.start_sweep`."""
 
     def map(self, jobs: Iterable[TileJob]) -> Iterator[TileResult]:

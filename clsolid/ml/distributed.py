@@ -8,7 +8,7 @@ next set is fitted on the host, from the score rows the tasks give back. Each wo
 keeps one engine (:class:`~clsolid.ml.opencl.CLBackend`) per scale in a process-wide cache:
 the scale's tables reach every worker once (``client.scatter(..., broadcast=True)``) and the
 engine is built on the first task that needs it; the sweep's arguments (seed, tag, global
-temperature, bias: the bias changes after every set) travel with each task. Each task is
+temperature, bias: the bias changes after every set; the sweep's relaxation) travel with each task. Each task is
 :func:`clsolid.ml.tiled.run_tile`, the same as in one process, so the volume is the one-process
 run's, bit for bit, when the workers' devices are the host's kind.
 
@@ -197,8 +197,8 @@ class DaskTiles:
         self.token = f"clsolid-scale-{uuid.uuid4().hex}"
         [self.tables] = self.client.scatter([(model, params, tuple(block))], broadcast=True, hash=False)
 
-    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
-        self.sweep = (seed, tag, float(t_in), np.array(bias, np.float64))
+    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray, relaxation: str | None = None) -> None:
+        self.sweep = (seed, tag, float(t_in), np.array(bias, np.float64), relaxation)
 
     def map(self, jobs: Iterable[TileJob]) -> Iterator[TileResult]:
         """Every job as a task at once; their results in the jobs' order."""

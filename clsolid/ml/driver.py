@@ -12,7 +12,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..balance import project_bias, score_rows, score_stride, softmax, sweep_target
-from .forecast import affordable, forecast_visits, proxy_visits
+from .forecast import affordable, forecast_visits, polish_visits, proxy_visits
 from ..exemplar import nearest_level_index
 from .model import ScaleModel, build_scale, check_exemplar_fits, parent_block
 from .params import MLParams
@@ -177,7 +177,7 @@ class _Clock:
         self._searching_rate = None
 
     def _left_here(self, sweep: int, sweep_s: float, visited: int, t: float, t_prev: float, target: float,
-                   sweeps_left: int, searched: float, level: int) -> float:
+                   sweeps_left: int, searched: float, level: int, polish_left: int) -> float:
         if self.visits:
             if not visited:
                 return 0.0
@@ -193,13 +193,14 @@ class _Clock:
             left = sweeps_left
         else:
             left = min(sweeps_left, math.ceil(math.log(target / t) / math.log(ratio)))
-        return sweep_s * left
+        return sweep_s * (left + polish_left)
 
     def eta(self, i: int, sweep: int, sweep_s: float, visited: int, model: ScaleModel, t: float, t_prev: float,
-            target: float, sweeps_left: int, searched: float = 0.0) -> float:
+            target: float, sweeps_left: int, searched: float = 0.0, polish_left: int = 0) -> float:
         """Seconds left after *sweep* of scale *i*, which took *sweep_s*, *searched* of them in
         the projected search (the pruned sum's first sweeps only, by default: a sweep that
-        searches costs several that do not, so the sweeps to come that do not are timed without it)."""
+        searches costs several that do not, so the sweeps to come that do not are timed without it).
+        *sweeps_left*: at most so many sweeps of the relaxation to come, then *polish_left* polish sweeps."""
         unit = self._unit(model)
         if visited:
             self.rate = sweep_s / (visited * unit)
@@ -209,8 +210,8 @@ class _Clock:
                 self.extra = self._searching_rate * visited / sweep_s
         if self.rate is None:
             return math.nan
-        here = 0.0 if sweeps_left == 0 else self._left_here(sweep, sweep_s, visited, t, t_prev, target, sweeps_left,
-                                                            searched, model.level)
+        here = 0.0 if sweeps_left == polish_left == 0 else self._left_here(
+            sweep, sweep_s, visited, t, t_prev, target, sweeps_left, searched, model.level, polish_left)
         if i + 1 == len(self.work):
             return float(here)
         if sweep_s < _MIN_TIMED_SWEEP:
@@ -225,7 +226,8 @@ class RunState:
     """Where a relaxation stands after a sweep: everything it needs to go on identically.
 
     ``scale`` indexes the scales coarsest first; ``done`` says the scale ended with this
-    sweep. The random streams need no saving: Philox draws are keyed by (seed, voxel,
+    sweep; ``relaxed``, the sweep that ended its relaxation where polish sweeps follow (0:
+    not yet). The random streams need no saving: Philox draws are keyed by (seed, voxel,
     scale, sweep), and each sweep's set order by (seed, scale, sweep).
     """
 
@@ -242,12 +244,14 @@ class RunState:
     timings: dict
     sources: np.ndarray | None = None  # the pruned likelihood's per-view sources (None: exact)
     parent: np.ndarray | None = None  # the scale's parent block (parent_weight > 0, below the coarsest)
+    relaxed: int = 0
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The state as named arrays (for :func:`clsolid.core.checkpoint.write_checkpoint`)."""
         out = {"volume": self.volume, "temperature": self.temperature, "inherited": self.inherited,
                "bias": self.bias, "scalars": np.array([self.t_init, self.target, self.t_now]),
-               "position": np.array([self.scale, self.sweep, int(self.done)])}
+               "position": np.array([self.scale, self.sweep, int(self.done)]),
+               "relaxed": np.array([self.relaxed])}
         for name in ("sources", "parent"):
             if getattr(self, name) is not None:
                 out[name] = getattr(self, name)
@@ -257,8 +261,9 @@ class RunState:
     def from_arrays(cls, a: dict[str, np.ndarray], timings: dict) -> "RunState":
         scale, sweep, done = (int(v) for v in a["position"])
         t_init, target, t_now = (float(v) for v in a["scalars"])
+        relaxed = int(a["relaxed"][0]) if "relaxed" in a else 0  # none before polish sweeps
         return cls(scale, sweep, bool(done), a["volume"], a["temperature"], np.asarray(a["inherited"], bool),
-                   t_init, target, t_now, a["bias"], timings, a.get("sources"), a.get("parent"))
+                   t_init, target, t_now, a["bias"], timings, a.get("sources"), a.get("parent"), relaxed)
 
 
 def run_ml(
@@ -279,6 +284,13 @@ def run_ml(
     every voxel is visited in every sweep (trusted ones too, unless ``inherited="fixed"``);
     the global temperature t_in starts each scale at ``anneal_start`` and is multiplied by
     ``anneal_cooling`` after each sweep, and the stop rule applies to it.
+
+    After the sweep that ends a scale's relaxation come :meth:`MLParams.polish_at` polish
+    sweeps (``polish_sweeps``, at the finest scale): each voxel takes the argmax of its
+    LCPDF, as under ICM, the balance on as in any sweep, and every voxel is visited but
+    the inherited ones kept fixed (``inherited="fixed"``), those that cooled to t = 0 too.
+    A draw now and then takes a label no neighbour shares; the argmax undoes some of those
+    (fewer with the balance, which flips uncertain voxels to keep the fractions).
 
     *checkpoint*, if given (a :class:`clsolid.ml.checkpoints.Checkpointer`), is asked after
     every sweep whether it is ``due`` and then given the :class:`RunState`; *resume*
@@ -308,11 +320,12 @@ def run_ml(
         if resume is not None and (i < resume.scale or (i == resume.scale and resume.done)):
             continue
         t_scale = time.perf_counter()
-        first, sources, parent = 1, None, None
+        first, sources, parent, relaxed = 1, None, None, 0
+        polish = params.polish_at(model.level)
         if resume is not None and i == resume.scale:  # go on with the sweep after the checkpoint's
             r = resume
             vol, temp, inherited = r.volume.reshape(model.shape), r.temperature.reshape(model.shape), r.inherited
-            t_init, target, t_now, first = r.t_init, r.target, r.t_now, r.sweep + 1
+            t_init, target, t_now, first, relaxed = r.t_init, r.target, r.t_now, r.sweep + 1, r.relaxed
             bias = np.array(r.bias, dtype=np.float64)
             sources, parent = r.sources, r.parent
             record = timings["scales"].pop()
@@ -338,23 +351,28 @@ def run_ml(
         backend.start_scale(model, vol, temp, params, sources=sources, parent=parent)
         balance = Balance(model, params.balance, vol, bias, scratch) if params.balance else None
         if progress is not None and not annealing:  # the ETA's sweeps, known before they run where affordable
-            if affordable(model):
+            if relaxed:  # resumed among the polish sweeps
+                visits = [polish_visits(inherited, resynth)] * (relaxed + polish + 1 - first)
+            elif affordable(model):
                 visits = forecast_visits(model, temp, inherited, resynth, params.xi, seed, first, n_sweeps,
-                                         None if params.sweeps else target)
+                                         None if params.sweeps else target, polish)
             else:  # a smaller block in its place; none for a scale resumed midway
                 visits = proxy_visits(model, params, seed, n_sweeps) if first == 1 else []
             clock.plan(first, visits)
         scratch.free(temp)  # the back end holds the state now (its own temperatures): free the host's copies
         vol = temp = None
-        for sweep in range(first, n_sweeps + 1):
+        sweep = first - 1
+        while True:
+            sweep += 1
             t_sweep, searched_before = time.perf_counter(), backend.search_seconds
             scratch.free(active)  # the last sweep's
-            if annealing:
+            if annealing or relaxed:  # a polish sweep visits the voxels that cooled too
                 active = scratch.apply(lambda i: ~i | resynth, bool, inherited)
             else:
                 temp = np.asarray(backend.temperature()).reshape(model.shape)
                 active = scratch.apply(lambda t, i: (t > 0) | (i & resynth), bool, temp, inherited)
-            backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias)
+            how = "icm" if relaxed else None  # a polish sweep takes the argmax whatever the relaxation
+            backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias, how)
             order = set_order(model.n_sets, seed, model.level, sweep)
             if balance is not None:
                 balance.start_sweep(active)
@@ -365,7 +383,7 @@ def run_ml(
                 backend.update(voxels)
                 if balance is not None:
                     bias = balance.after(backend, voxels)
-                    backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias)
+                    backend.start_sweep(seed, relax_tag(model.level, sweep), t_now, bias, how)
             if annealing:
                 t_prev, t_now = t_now, t_now * params.anneal_cooling
             else:
@@ -376,10 +394,15 @@ def run_ml(
             record["temperatures"].append(t_now)
             record["visited"].append(visited)
             record["sweep_seconds"].append(sweep_s)
-            if params.sweeps:
-                done = sweep == n_sweeps
+            if relaxed:
+                done = sweep == relaxed + polish
             else:
-                done = t_now <= target or t_now == 0.0 or sweep == n_sweeps
+                if params.sweeps:
+                    done = sweep == n_sweeps
+                else:
+                    done = t_now <= target or t_now == 0.0 or sweep == n_sweeps
+                if done and polish:  # the relaxation ended: the polish sweeps follow
+                    relaxed, done = sweep, False
             log.debug("scale %d sweep %d: T=%.1f visited=%d %.2fs", i + 1, sweep, t_now, visited, sweep_s)
             if checkpoint is not None and checkpoint.due(done):  # before progress: a Ctrl-C there keeps it
                 # written before save returns: the back end's arrays need no copies (host memory)
@@ -387,12 +410,13 @@ def run_ml(
                                          np.asarray(backend.temperature()), inherited, t_init,
                                          target, t_now, np.array(bias, dtype=np.float64),
                                          {"scales": timings["scales"] + [record]},
-                                         np.asarray(backend.sources()) if pruned else None, parent))
+                                         np.asarray(backend.sources()) if pruned else None, parent, relaxed))
             if progress is not None:
-                eta = clock.eta(i, sweep, sweep_s, visited, model, t_now, t_prev, target,
-                                0 if done else n_sweeps - sweep, searched)
+                left, polish_left = (0, relaxed + polish - sweep) if relaxed else (n_sweeps - sweep, polish)
+                eta = clock.eta(i, sweep, sweep_s, visited, model, t_now, t_prev, target, 0 if done else left,
+                                searched, 0 if done else polish_left)
                 progress(SweepInfo(scale=i + 1, n_scales=len(models), shape=model.shape, sweep=sweep,
-                                   max_sweeps=n_sweeps, temperature=t_now,
+                                   max_sweeps=n_sweeps + polish, temperature=t_now,
                                    initial_temperature=t_init, target=target, visited=visited,
                                    elapsed=time.perf_counter() - clock.t0, eta=eta,
                                    exemplar=model.exemplar, volume=lambda: np.array(backend.volume(), copy=True)))
@@ -403,6 +427,7 @@ def run_ml(
         active = None
         coarse = np.asarray(backend.volume()).reshape(model.shape)  # float32 on a device, as the state
         record["sweeps"] = len(record["temperatures"])
+        record["polish_sweeps"] = sweep - relaxed if relaxed else 0
         record["seconds"] = time.perf_counter() - t_scale
         timings["scales"].append(record)
     timings["total_s"] = time.perf_counter() - clock.t0

@@ -42,12 +42,18 @@ def affordable(model: ScaleModel) -> bool:
     return int(np.prod(model.shape)) * int(model.union_offsets.shape[0]) <= REPLAY_TERMS
 
 
+def polish_visits(inherited: np.ndarray, resynth: bool) -> int:
+    """Voxels a polish sweep visits (``polish_sweeps``): every one but the inherited ones kept fixed."""
+    return int(np.size(inherited)) if resynth else int(np.size(inherited) - np.count_nonzero(inherited))
+
+
 def forecast_visits(model: ScaleModel, temp: np.ndarray, inherited: np.ndarray, resynth: bool, xi: float,
-                    seed: int, first: int, last: int, target: float | None) -> list[int]:
-    """Voxels visited by each sweep from *first* to the one that ends the scale (at most
-    *last*; with a *target*, also the first whose global temperature is at most the target
-    or 0), replaying the driver's temperature schedule from the temperatures *temp* (ICM
-    and Gibbs; not annealing, whose visits do not depend on temperatures)."""
+                    seed: int, first: int, last: int, target: float | None, polish: int = 0) -> list[int]:
+    """Voxels visited by each sweep from *first* to the one that ends the scale's relaxation
+    (at most *last*; with a *target*, also the first whose global temperature is at most the
+    target or 0), replaying the driver's temperature schedule from the temperatures *temp*
+    (ICM and Gibbs; not annealing, whose visits do not depend on temperatures), then by
+    its *polish* sweeps (:func:`polish_visits`)."""
     temp = np.array(temp, dtype=np.float64).reshape(model.shape)
     inherited = np.asarray(inherited, dtype=bool).reshape(model.shape)
     flat = temp.reshape(-1)
@@ -63,7 +69,7 @@ def forecast_visits(model: ScaleModel, temp: np.ndarray, inherited: np.ndarray, 
         t_now = float(flat.sum())
         if target is not None and (t_now <= target or t_now == 0.0):
             break
-    return visits
+    return visits + [polish_visits(inherited, resynth)] * polish
 
 
 def proxy_shape(model: ScaleModel, multiple: int) -> tuple[int, int, int]:
@@ -77,7 +83,7 @@ def proxy_shape(model: ScaleModel, multiple: int) -> tuple[int, int, int]:
 
 def proxy_visits(model: ScaleModel, params: Any, seed: int, last: int) -> list[int]:
     """Forecast visits of a scale too large to replay, from its first sweep to the one that
-    ends it (at most *last*): a :func:`proxy_shape` block started as the run's (t = 0 on the
+    ends it (at most *last*, then its polish sweeps): a :func:`proxy_shape` block started as the run's (t = 0 on the
     inherited corners below the coarsest scale and on the ``+in`` slices, at the run's
     spacing), replayed by :func:`forecast_visits`, scaled to the run's volume."""
     step = 2 ** (params.scales - 1 - model.level)  # slice depths at this scale are multiples of it
@@ -94,6 +100,6 @@ def proxy_visits(model: ScaleModel, params: Any, seed: int, last: int) -> list[i
     temp[insert_slices(np.zeros(shape, np.float32), model.exemplar, plan, model.level, seed, full)] = 0.0
     target = None if params.sweeps else (1.0 - params.stop_fraction) * float(temp.sum())
     visits = forecast_visits(proxy, temp, temp == 0, params.inherited == "resynthesize", params.xi, seed, 1,
-                             last, target)
+                             last, target, params.polish_at(model.level))
     scale = np.prod(model.shape) / np.prod(shape)
     return [int(round(v * scale)) for v in visits]

@@ -13,7 +13,7 @@ from ..balance import n_score_slots, score_stride
 from ..core.device import Device
 from ..errors import DeviceMemoryError, InputError
 from .model import ScaleModel, difference
-from .params import MLParams
+from .params import RELAXATIONS, MLParams
 from ..core.philox import TAG_INIT, sample_tag, seed_key
 from ..core.probe import VECTOR_WIDTHS, probe
 from . import pruned
@@ -358,9 +358,10 @@ class CLBackend:
                 self._buf(start.astype(np.int32)), self._buf(order.astype(np.int32)),
                 self._buf(_float8_rows(proj.sites[order])), self.windows[0])
 
-    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
-        """Random stream (Philox key *seed*, counter tag *tag*), global temperature *t_in*
-        and per-label balance term *bias* for the updates of the coming sweep."""
+    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray, relaxation: str | None = None) -> None:
+        """Random stream (Philox key *seed*, counter tag *tag*), global temperature *t_in*,
+        per-label balance term *bias* and *relaxation* (None: the run's) for the updates of
+        the coming sweep."""
         import pyopencl as cl
 
         padded = np.zeros(self._pad(self.model.labels.size), np.float32)
@@ -370,7 +371,8 @@ class CLBackend:
         # the projected candidates parzen_candidates reads this sweep (projected_nearest runs if any)
         self.n_projected = self.params.prune_projected_k if pruned.projects(self.params, tag) else 0
         self._set_scalars(key0=key[0], key1=key[1], tag=tag, sample_tag=sample_tag(tag), t_in=t_in,
-                          n_projected=self.n_projected)
+                          n_projected=self.n_projected,
+                          relaxation=RELAXATIONS.index(relaxation or self.params.relaxation))
 
     def update(self, voxels: np.ndarray) -> None:
         """Relax one conflict-free set of voxels (flat indices), batch by batch."""

@@ -152,7 +152,7 @@ class MLParams:
     exemplar (:meth:`for_exemplar`); the result's ``params`` record what was taken.
 
     The published form of the method (Urs et al., TIP 2014; Urs thesis ch. 5) is
-    ``relaxation="icm", balance=0, slice_layout="aligned", insert_slices=4,
+    ``relaxation="icm", polish_sweeps=0, balance=0, slice_layout="aligned", insert_slices=4,
     distance="squared", falloff=0, seam_gap=0, parent_weight=0, shared_weight=1,
     bandwidth_factor=1, pyramid="decimate"`` (the likelihood presets of :mod:`clsolid.presets`).
     """
@@ -218,6 +218,9 @@ class MLParams:
                                    check=Real(0, 1, lo_open=True, hi_open=True), advanced=True)
     sweeps: int | None = option(None, "exactly this many sweeps per scale", group=_TUNE, check=Int(1), advanced=True,
                                 none="the temperature stop rule")
+    polish_sweeps: int = option(0, "last sweeps of the finest scale that take each voxel's argmax (as icm), "
+                                "visiting every voxel but fixed inherited ones: they clear some of the isolated voxels "
+                                "that draws leave; 0: none", group=_TUNE, check=Int(0), advanced=True, metavar="N")
     balance: float = option(1.0, "label-histogram balance: each sweep aims this far towards the exemplar's "
                             "fractions (0: off, the thesis)", group=_ML, check=Real(0, 1), metavar="B")
     likelihood: str = option("auto", "the Parzen sum over every exemplar site (exact, the thesis) or over "
@@ -348,6 +351,11 @@ class MLParams:
     @property
     def heuristic_code(self) -> int:
         return HEURISTICS[self.heuristic][0]
+
+    def polish_at(self, level: int) -> int:
+        """The polish sweeps that end scale *level* (0: the finest): ``polish_sweeps`` at the
+        finest, none coarser, where the finer scale re-draws most voxels anyway."""
+        return self.polish_sweeps if level == 0 else 0
 
     @property
     def relaxation_code(self) -> int:

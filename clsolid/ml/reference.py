@@ -218,9 +218,11 @@ class ReferenceBackend:
         self.stride = score_stride(model.shape)
         self.start_sweep(0, 0, 1.0, np.zeros(model.labels.size))
 
-    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
-        """Random stream, global temperature and balance term of the coming sweep."""
+    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray, relaxation: str | None = None) -> None:
+        """Random stream, global temperature, balance term and *relaxation* (None: the run's)
+        of the coming sweep."""
         self.seed, self.tag, self.t_in, self.bias = seed, tag, t_in, np.asarray(bias, np.float64)
+        self.relaxation = relaxation or self.params.relaxation
 
     def update(self, voxels: np.ndarray) -> None:
         """Relax one conflict-free set of voxels (flat indices)."""
@@ -257,12 +259,12 @@ class ReferenceBackend:
         m = self.model
         logl = np.stack([normalise(f) for f in self._sums(voxels)])
         words = None
-        if self.params.relaxation != "icm":
+        if self.relaxation != "icm":
             words = voxel_words(self.seed, *np.unravel_index(voxels, m.shape), self.tag)
         code = self.params.heuristic_code
         kept = voxels % self.stride == 0
         self._scores[voxels[kept] // self.stride] = unbiased_score(code, logl[:, kept])
-        labels = relax(self.params.relaxation, code, logl, m.labels,
+        labels = relax(self.relaxation, code, logl, m.labels,
                        self.vol.ravel()[voxels], words, self.t_in, self.bias)
         hot = self.temp.ravel()[voxels] > 0  # t held at 0 for inherited (re-synthesised) voxels
         t_new = new_temperature(m, self.temp, voxels, self.params.xi)

@@ -132,8 +132,8 @@ class LocalTiles:
     def load_scale(self, model: ScaleModel, params: MLParams, block) -> None:
         self.engine.load_scale(model, params, block)
 
-    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
-        self.engine.start_sweep(seed, tag, t_in, bias)
+    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray, relaxation: str | None = None) -> None:
+        self.engine.start_sweep(seed, tag, t_in, bias, relaxation)
 
     def map(self, jobs: Iterable[TileJob]) -> Iterator[TileResult]:
         """The jobs' results in their order, each run when asked for (one tile's state at a time)."""
@@ -194,9 +194,9 @@ class TiledBackend:
         self.stride = score_stride(model.shape)
         self._scores = np.zeros((n_score_slots(model.shape), model.labels.size), np.float32)
 
-    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray) -> None:
+    def start_sweep(self, seed: int, tag: int, t_in: float, bias: np.ndarray, relaxation: str | None = None) -> None:
         """As :meth:`clsolid.ml.opencl.CLBackend.start_sweep`."""
-        self.runner.start_sweep(seed, tag, t_in, bias)
+        self.runner.start_sweep(seed, tag, t_in, bias, relaxation)
 
     def update(self, voxels: np.ndarray) -> None:
         """Relax one conflict-free set of voxels (flat indices), tile by tile. A tile whose

@@ -59,6 +59,19 @@ def test_every_relaxation_resumes_identically(tmp_path, device, relaxation):
     np.testing.assert_array_equal(clsolid.resume(folder, device=device), whole)
 
 
+def test_a_run_resumed_midway_through_its_polish_sweeps_is_identical(tmp_path, device):
+    """The checkpoint says where the relaxation ended: a run stopped after the first of two
+    polish sweeps polishes once more, as the uninterrupted run did."""
+    whole = clsolid.synthesize("gravel", SHAPE, device=device, full_output=True, polish_sweeps=2, **KW)
+    folder = _interrupted(tmp_path, device, sum(s["sweeps"] for s in whole.timings["scales"]) - 1, polish_sweeps=2)
+    arrays = read_checkpoint(folder)[1]
+    (scale, sweep, done), (relaxed,) = arrays["position"], arrays["relaxed"]
+    assert scale == 1 and not done and sweep == relaxed + 1  # midway through the polish
+    res = clsolid.resume(folder, device=device, full_output=True)
+    np.testing.assert_array_equal(res.volume, whole.volume)
+    assert res.timings["scales"][1]["visited"] == whole.timings["scales"][1]["visited"]
+
+
 @pytest.mark.slow
 def test_a_run_with_parent_terms_resumes_identically_midway_through_a_finer_scale(tmp_path, device):
     """The checkpoint keeps the scale's parent block (the coarser result repeated): a run

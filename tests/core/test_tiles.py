@@ -95,7 +95,7 @@ def test_halo_is_the_farthest_read(labels):
 
 # -- a tiled run is the one-piece run ------------------------------------------------------------
 
-CASES = [  # each relaxation with 2 and 3 views, exact and pruned; balance on (the default)
+CASES = [  # each relaxation with 2 and 3 views, exact and pruned; balance on (the default); polish sweeps
     dict(relaxation="icm", views=2, likelihood="exact", tile=8),
     dict(relaxation="icm", views=3, likelihood="pruned", tile=10),  # the coarse scale in one tile
     dict(relaxation="gibbs", views=2, likelihood="pruned", tile=8),
@@ -104,6 +104,8 @@ CASES = [  # each relaxation with 2 and 3 views, exact and pruned; balance on (t
     dict(relaxation="annealing", views=3, likelihood="pruned", tile=8),
     dict(relaxation="gibbs", views=2, likelihood="pruned", distance="weighted", tile=8),
     dict(relaxation="gibbs", views=3, likelihood="exact", distance="mismatch", tile=10),
+    dict(relaxation="gibbs", views=2, likelihood="pruned", polish_sweeps=1, tile=8),
+    dict(relaxation="annealing", views=2, likelihood="exact", polish_sweeps=1, tile=7),
 ]
 
 
@@ -112,7 +114,7 @@ def _params(case):
                     **{k: v for k, v in case.items() if k != "tile"})
 
 
-@pytest.mark.parametrize("case", slow_except(CASES, 3), ids=lambda c: "-".join(str(v) for v in c.values()))
+@pytest.mark.parametrize("case", slow_except(CASES, 3, 8), ids=lambda c: "-".join(str(v) for v in c.values()))
 def test_tiled_run_is_the_one_piece_run(device, labels, case):
     params = _params(case)
     whole = CLBackend(device)

@@ -37,10 +37,11 @@ def labels(brick_labels):
 # Whole runs on the workers are slow-only: each worker builds its kernels anew. The default run
 # keeps what is cheap there: the random start drawn on the workers, the options, a worker's error.
 @pytest.mark.slow
-@pytest.mark.parametrize("likelihood", ["exact", "pruned"])
-def test_distributed_run_is_the_one_process_run(device, client, labels, likelihood):
-    """Gibbs with the balance (the defaults), exact and pruned: the sources go to the workers and back."""
-    params = MLParams(neighborhood=5, scales=2, sweeps=2, likelihood=likelihood)
+@pytest.mark.parametrize("likelihood, polish", [("exact", 0), ("pruned", 1)])
+def test_distributed_run_is_the_one_process_run(device, client, labels, likelihood, polish):
+    """Gibbs with the balance (the defaults), exact and pruned: the sources go to the workers and
+    back; a polish sweep's relaxation too."""
+    params = MLParams(neighborhood=5, scales=2, sweeps=2, likelihood=likelihood, polish_sweeps=polish)
     whole = CLBackend(device)
     local = TiledBackend(LocalTiles(CLBackend(device)), 8)
     dask = TiledBackend(DaskTiles(client, device), 8)

@@ -1,5 +1,7 @@
 """Whole runs: OpenCL against the float64 reference, determinism, the driver's rules."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from conftest import slow_except
@@ -9,29 +11,53 @@ from clsolid.ml.params import MLParams
 from clsolid.ml.reference import ReferenceBackend
 from clsolid.ml.driver import run_ml
 
-CASES = [  # (neighborhood, views, heuristic, shape, scales)
-    (3, 2, "h2-product", (12, 12, 12), 2),
-    (5, 2, "h2-product", (16, 12, 10), 2),
-    (5, 3, "h2-min", (10, 12, 14), 2),
-    (3, 3, "h2-max", (8, 8, 8), 2),
-    (5, 2, "h1-lowest", (12, 12, 12), 2),
-    (3, 2, "h1-highest", (12, 12, 12), 2),
-    (3, 3, "h1-mean", (8, 10, 12), 2),
-    (5, 2, "h2-product", (9, 13, 11), 1),
+CASES = [  # (neighborhood, views, heuristic, shape, scales, polish_sweeps)
+    (3, 2, "h2-product", (12, 12, 12), 2, 0),
+    (5, 2, "h2-product", (16, 12, 10), 2, 0),
+    (5, 3, "h2-min", (10, 12, 14), 2, 0),
+    (3, 3, "h2-max", (8, 8, 8), 2, 0),
+    (5, 2, "h1-lowest", (12, 12, 12), 2, 0),
+    (3, 2, "h1-highest", (12, 12, 12), 2, 0),
+    (3, 3, "h1-mean", (8, 10, 12), 2, 0),
+    (5, 2, "h2-product", (9, 13, 11), 1, 0),
+    (3, 2, "h2-product", (12, 12, 12), 2, 2),
+    (3, 3, "h1-lowest", (10, 12, 8), 2, 1),
 ]
 
 
-@pytest.mark.parametrize("k, views, heuristic, shape, scales", slow_except(CASES, 6))
-def test_whole_run_matches_reference(device, small_labels, k, views, heuristic, shape, scales):
+@pytest.mark.parametrize("k, views, heuristic, shape, scales, polish", slow_except(CASES, 6, 8))
+def test_whole_run_matches_reference(device, small_labels, k, views, heuristic, shape, scales, polish):
     # without the balance: its per-set fit turns float32's last bits into other biases
     # (see tests/ml/test_relaxation.py, test_balance_runs_alike)
-    params = MLParams(neighborhood=k, views=views, heuristic=heuristic, scales=scales, insert_slices=1, balance=0.0)
+    params = MLParams(neighborhood=k, views=views, heuristic=heuristic, scales=scales, insert_slices=1, balance=0.0,
+                      polish_sweeps=polish)
     ref, ref_t, _ = run_ml(small_labels, shape, params, 11, ReferenceBackend())
     got, got_t, _ = run_ml(small_labels, shape, params, 11, CLBackend(device))
     agree = np.mean(ref == got)
     assert agree >= 0.99, f"only {agree:.3%} of voxels agree with the float64 reference"
     # the run really relaxed something: not just the initial noise
     assert [s["sweeps"] for s in got_t["scales"]] == [s["sweeps"] for s in ref_t["scales"]]
+    # the polish sweeps end the finest scale only
+    assert [s["polish_sweeps"] for s in got_t["scales"]] == [0] * (scales - 1) + [polish]
+
+
+def test_polish_sweeps_follow_the_relaxation_and_change_nothing_before(device, small_labels):
+    """polish_sweeps=0 is the run without the option; with N, the finest scale's relaxation
+    ends where it did, on the same volume, and N sweeps over every voxel follow."""
+    shape, params = (12, 14, 16), MLParams(neighborhood=5, scales=2, insert_slices=1)
+    plain, plain_t, _ = run_ml(small_labels, shape, params, 3, CLBackend(device))
+    np.testing.assert_array_equal(run_ml(small_labels, shape, replace(params, polish_sweeps=0), 3,
+                                         CLBackend(device))[0], plain)
+    seen = {}
+    polished, t, _ = run_ml(small_labels, shape, replace(params, polish_sweeps=2), 3, CLBackend(device),
+                            progress=lambda i: seen.setdefault((i.scale, i.sweep), i.volume()))
+    coarse, fine = plain_t["scales"]
+    relaxed = fine["sweeps"]
+    assert t["scales"][0]["visited"] == coarse["visited"]
+    assert t["scales"][1]["visited"] == fine["visited"] + [np.prod(shape)] * 2  # the cooled voxels too
+    assert t["scales"][1]["polish_sweeps"] == 2
+    np.testing.assert_array_equal(seen[(2, relaxed)].reshape(shape), plain)
+    assert np.mean(polished != plain) > 0.001  # the polish changed some labels
 
 
 def test_every_runtime_grows_nearly_the_same_volume(small_labels):
@@ -88,8 +114,11 @@ def test_max_sweeps_bounds_a_scale(device, small_labels):
     assert timings["scales"][0]["sweeps"] == 2
 
 
-def test_fixed_inherited_voxels_keep_coarse_values(small_labels):
-    params = MLParams(neighborhood=3, scales=2, inherited="fixed", upsampling="1/8", insert_slices=0)
+@pytest.mark.parametrize("polish", [0, 1])
+def test_fixed_inherited_voxels_keep_coarse_values(small_labels, polish):
+    """Through the polish sweeps too, which visit every other voxel."""
+    params = MLParams(neighborhood=3, scales=2, inherited="fixed", upsampling="1/8", insert_slices=0,
+                      polish_sweeps=polish)
     seen = {}
 
     class Spy(ReferenceBackend):
@@ -100,6 +129,8 @@ def test_fixed_inherited_voxels_keep_coarse_values(small_labels):
     out, timings, _ = run_ml(small_labels, (8, 8, 8), params, 2, Spy())
     coarse_start = seen["starts"][1][::2, ::2, ::2]
     np.testing.assert_array_equal(out[::2, ::2, ::2], coarse_start)  # never revisited
+    if polish:
+        assert timings["scales"][1]["visited"][-1] == 8**3 - 4**3
 
 
 def test_8_of_8_upsampling_copies_into_all_children(small_labels):

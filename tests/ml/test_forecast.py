@@ -12,10 +12,12 @@ from clsolid.ml.params import MLParams
 
 
 @pytest.mark.parametrize("options", slow_except([{}, {"relaxation": "icm"}, {"inherited": "fixed", "views": 3},
-                                                 {"sweeps": 3}], 0))
+                                                 {"sweeps": 3}, {"polish_sweeps": 2},
+                                                 {"polish_sweeps": 1, "inherited": "fixed"}], 0, 4))
 def test_forecast_replays_every_scales_sweeps_and_visits(device, monkeypatch, options):
     """The temperatures do not depend on the labels: the forecast made at a scale's start
-    is the sweeps and visits the run then makes, and the ETA is 0 exactly at the end."""
+    is the sweeps and visits the run then makes (its polish sweeps too), and the ETA is 0
+    exactly at the end."""
     from clsolid.ml import driver
 
     made, etas = [], []
@@ -89,3 +91,16 @@ def test_eta_times_the_sweeps_to_come_without_the_projected_search(searching_swe
     assert clock.eta(1, 1, 30.0, 1000, fine, 1.0, 2.0, 0.0, 2, searched=20.0) == pytest.approx(want)
     # without a search, every sweep to come at this one's rate
     assert clock.eta(1, 2, 6.0, 1000, fine, 1.0, 2.0, 0.0, 1) == pytest.approx(6.0)
+
+
+def test_eta_counts_the_polish_sweeps_where_nothing_is_forecast():
+    """Annealing (no forecast): the sweeps the global temperature still needs, extrapolated from
+    its fall, then the polish sweeps, each at the last sweep's time."""
+    from clsolid.ml.driver import _Clock
+
+    fine = _scale_stub(0, 16)
+    clock = _Clock([fine], MLParams(relaxation="annealing", polish_sweeps=2))
+    # halved by the last sweep, 4 times the target: 2 sweeps more, then the 2 polish sweeps
+    assert clock.eta(0, 3, 1.5, 1000, fine, 4.0, 8.0, 1.0, 10, polish_left=2) == pytest.approx(6.0)
+    assert clock.eta(0, 6, 1.5, 1000, fine, 0.5, 1.0, 1.0, 0, polish_left=1) == pytest.approx(1.5)  # polishing
+    assert clock.eta(0, 7, 1.5, 1000, fine, 0.25, 0.5, 1.0, 0, polish_left=0) == 0.0
