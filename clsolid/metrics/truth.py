@@ -6,7 +6,7 @@ included (SliceGAN, Kench & Cooper, *Nature Machine Intelligence* 3, 2021, secti
 "Results"): per phase, the volume fraction, the specific surface area, S2 along each axis,
 the connected fraction and the tortuosity factor along each axis. The real volume's own
 spread (its sub-volumes of the generated size) says how far apart two honest samples of
-the material lie: its *band*.
+the material lie: its *band* (docs/design.md#validation-band).
 """
 
 from __future__ import annotations

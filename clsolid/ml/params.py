@@ -218,6 +218,7 @@ class MLParams:
                                    check=Real(0, 1, lo_open=True, hi_open=True), advanced=True)
     sweeps: int | None = option(None, "exactly this many sweeps per scale", group=_TUNE, check=Int(1), advanced=True,
                                 none="the temperature stop rule")
+    # none by default: they clear too few isolated voxels for their time (docs/design.md#polish-sweeps)
     polish_sweeps: int = option(0, "last sweeps of the finest scale that take each voxel's argmax (as icm), "
                                 "visiting every voxel but fixed inherited ones: they clear some of the isolated voxels "
                                 "that draws leave; 0: none", group=_TUNE, check=Int(0), advanced=True, metavar="N")
