@@ -17,6 +17,7 @@ import numpy as np
 from .api import synthesize
 from .errors import InputError
 from .metrics import truth
+from .metrics import two_point_correlation_axes
 from .metrics._common import as_volume, check_int, jsonable
 from .phases import is_categorical
 from .report import _require_matplotlib
@@ -72,8 +73,9 @@ def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int
         JSON-ready: ``real`` (shape, section, thresholds), ``generated`` (method, shape,
         seeds), ``band_count`` (the real volume's sub-volumes), ``phases`` (by phase and
         property: real, band, generated mean, error, in_band, met; see
-        :func:`clsolid.metrics.truth.compare_properties`), ``volumes`` (each generated
-        volume's own properties) and ``targets``.
+        :func:`clsolid.metrics.truth.compare_properties`), ``section`` (by phase, the
+        section's own fraction and S2 along its rows and columns, y and x: what the
+        generator saw), ``volumes`` (each generated volume's own properties) and ``targets``.
     """
     vol = as_volume(real, "real volume", min_side=4)
     n = check_int(n, "n", 1)
@@ -105,10 +107,15 @@ def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int
     say("the generated volumes' properties")
     samples = [truth.solid_properties(g, phases=phases, max_lag=max_lag, tortuosity=tortuosity) for g in grown]
     compared = truth.compare_properties(real_props, band, truth.mean_properties(samples))
+    # What the generator saw: a section's fraction and S2 can lie far from the whole volume's.
+    cut = labels[z]
+    seen = {key: {"fraction": float(np.mean(cut == phase)),
+                  "s2": list(two_point_correlation_axes(cut, phase, max_lag=max_lag))}
+            for key, phase in zip(real_props, phases)}
     return jsonable({
         "real": {"shape": vol.shape, "section": f"front, z = {z}", "thresholds": thresholds},
         "generated": {"method": method, "shape": shape, "seeds": list(range(seed, seed + n))},
-        "band_count": count, "phases": compared, "volumes": samples,
+        "band_count": count, "phases": compared, "section": seen, "volumes": samples,
         "targets": {**truth.TARGETS, "tortuosity_min_fraction": truth.TORTUOSITY_MIN_FRACTION},
     })
 
@@ -156,7 +163,8 @@ def format_validation(report: dict) -> str:
     widths = (16, 10, 20, 10, 10)
     head = ("property", "real", "band", "generated", "error")
     for key, rows in report["phases"].items():
-        lines += ["", f"phase {key}", "  " + "".join(h.ljust(w) for h, w in zip(head, widths)) + "target"]
+        lines += ["", f"phase {key}: the section's fraction {report['section'][key]['fraction']:.4g}",
+                  "  " + "".join(h.ljust(w) for h, w in zip(head, widths)) + "target"]
         for row in _rows(rows):
             lines.append("  " + "".join(c.ljust(w) for c, w in zip(row, widths)) + row[-1])
     lines += ["", "error: fraction in points (0.01 = 1 point); S2, the largest gap in percent of the phase's "
@@ -178,6 +186,9 @@ def plot_validation(report: dict, path: Any) -> None:
             low, high = (np.asarray(b) for b in s2["band"][a])
             ax.fill_between(lags[:low.size], low, high, color="0.85", label="real band")
             ax.plot(lags, s2["real"][a], color="k", lw=1.5, label="real")
+            if a > 0:  # the section's rows and columns run along y and x
+                seen = report["section"][key]["s2"][a - 1]
+                ax.plot(np.arange(len(seen)), seen, color="tab:blue", lw=1, ls="--", label="section")
             for sample in report["volumes"]:
                 ax.plot(np.arange(len(sample[key]["s2"][a])), sample[key]["s2"][a], color="tab:orange", lw=0.6,
                         alpha=0.6)

@@ -30,12 +30,14 @@ def test_the_report_holds_every_phase_and_property_beside_the_real_band(real, re
         assert rows["fraction"]["real"] == pytest.approx(real_fraction)
         # the generator keeps its exemplar's phases: the section's fraction, give or take a slice's spread
         section_fraction = float(np.mean(real[12] == int(key)))
+        assert report["section"][key]["fraction"] == pytest.approx(section_fraction)
+        assert len(report["section"][key]["s2"]) == 2  # along the section's y and x
         assert abs(rows["fraction"]["generated"] - section_fraction) < 0.05
         assert len(rows["s2"]["error"]) == 3 and len(rows["connected"]["real"]) == 3
         assert ("tortuosity" in rows) == (real_fraction > 0.25)
     json.dumps(report, allow_nan=False)  # JSON as it stands
     table = format_validation(report)
-    assert all(f"phase {k}" in table for k in "012") and "S2 along z" in table and "tortuosity x" in table
+    assert all(f"phase {k}: the section's fraction" in table for k in "012") and "S2 along z" in table and "tortuosity x" in table
 
 
 def test_a_grey_real_volume_is_cut_at_its_own_levels_and_so_are_the_grown_ones(device):
