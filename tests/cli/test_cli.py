@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pytest
+from conftest import slow_except
 
 from clsolid.cli import EXIT_MEMORY, EXIT_NO_DEVICE, EXIT_OUTPUT, EXIT_USAGE, main
 from clsolid.volumeio import load_volume
@@ -83,7 +84,8 @@ def test_same_seed_same_file(tmp_path, device):
     np.testing.assert_array_equal(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
 
 
-@pytest.mark.parametrize("argv, key, expected", [
+# the default run keeps a recorded default, an auto value resolved, flags of several values and of several options
+@pytest.mark.parametrize("argv, key, expected", slow_except([
     ([], "bandwidth_factor", [0.2, 0.2]),
     (["--bandwidth-factor", "0.5"], "bandwidth_factor", [0.5, 0.5]),
     (["--bandwidth-factor", "0.3", "2"], "bandwidth_factor", [0.3, 2.0]),
@@ -111,7 +113,7 @@ def test_same_seed_same_file(tmp_path, device):
     (["--shared-weight", "0", "--shared-profile", "line"], "shared_profile", "line"),
     ([], "region", 0),  # set by set over the whole block
     (["--region", "6"], "region", 6),
-])
+], 0, 2, 7, 10, 17, 22))
 def test_method_options_reach_the_sidecar(tmp_path, device, argv, key, expected):
     assert main(["synth", "-o", str(tmp_path / "v.npy"), *FAST, "-q", *argv]) == 0
     params = json.loads((tmp_path / "v.json").read_text())["params"]

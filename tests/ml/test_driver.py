@@ -41,6 +41,7 @@ def test_whole_run_matches_reference(device, small_labels, k, views, heuristic, 
     assert [s["polish_sweeps"] for s in got_t["scales"]] == [0] * (scales - 1) + [polish]
 
 
+@pytest.mark.slow
 def test_polish_sweeps_follow_the_relaxation_and_change_nothing_before(device, small_labels):
     """polish_sweeps=0 is the run without the option; with N, the finest scale's relaxation
     ends where it did, on the same volume, and N sweeps over every voxel follow."""
