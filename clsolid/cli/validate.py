@@ -9,6 +9,7 @@ import pathlib
 import sys
 from typing import Any
 
+from ..api import METHODS
 from ..errors import InputError
 from .outputs import check_writable
 
@@ -21,7 +22,7 @@ def add_validate(sub: Any) -> argparse.ArgumentParser:
                                    "connected fraction, tortuosity factor) with the real volume's and with its "
                                    "own spread over sub-volumes of the same size.")
     p.add_argument("real", metavar="REAL3D", help="the real 3D (Z, Y, X) volume, segmented or grey (.npy, .tif)")
-    p.add_argument("--method", default=None, help="the generator (default: ml, or the config's)")
+    p.add_argument("--method", default=None, choices=tuple(METHODS), help="the generator (default: ml, or the config's)")
     p.add_argument("-n", type=int, default=3, help="volumes to grow (default 3)")
     p.add_argument("--shape", type=int, nargs=3, metavar=("Z", "Y", "X"), default=None,
                    help="their shape (default: half the real volume's on each axis)")
