@@ -11,6 +11,7 @@ from typing import Any
 
 from ..api import METHODS
 from ..errors import InputError
+from .config import read_config
 from .outputs import check_writable
 
 
@@ -41,7 +42,6 @@ def add_validate(sub: Any) -> argparse.ArgumentParser:
 def run_validate(args: argparse.Namespace) -> int:
     """Run ``clsolid validate`` with parsed arguments; errors are
     :class:`~clsolid.errors.ClsolidError` subclasses."""
-    from ..core.tomlfile import read_toml
     from ..report import _require_matplotlib, load_volume
     from ..validation import format_validation, plot_validation, validate
 
@@ -55,9 +55,9 @@ def run_validate(args: argparse.Namespace) -> int:
         path = pathlib.Path(args.config)
         if path.suffix.lower() != ".toml":
             raise InputError(f"--config {path} must be a .toml file of the method's options")
-        options = {k: v for k, v in read_toml(path).items() if k != "about"}
-    method = args.method or options.pop("method", "ml")
-    options.pop("method", None)
+        options = read_config(path)
+    method = options.pop("method", None)
+    method = args.method or method or "ml"
     try:
         real = load_volume(args.real)
     except OSError as exc:

@@ -70,7 +70,7 @@ def solid_properties(labels: Any, *, phases: Any = None, max_lag: int | None = N
         out[_key(phase)] = {
             "fraction": fraction,
             "surface_area": specific_surface_area(vol, phase),
-            "s2": [curve for curve in two_point_correlation_axes(vol, phase, max_lag=max_lag)],
+            "s2": list(two_point_correlation_axes(vol, phase, max_lag=max_lag)),
             "connected": list(connected_fraction(vol, phase)),
             "tortuosity": [tortuosity_factor(vol, phase, a) for a in range(3)] if solve else None,
         }
