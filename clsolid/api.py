@@ -164,7 +164,8 @@ def synthesize(
         The method's parameters by name. The ones to know first:
 
         - ``neighborhood`` (odd window side; 11 for ``"ml"``, 7 for the others),
-        - ``scales`` (multi-scale levels, 3), ``views`` (2: front and right; 3: all three),
+        - ``scales`` (multi-scale levels, 3), ``views`` (3: all three, the default; 2: front and
+          right only, for layered or directional materials),
         - ``levels`` (most grey levels, 32; an image with at most that many values keeps them),
         - ``"ml"``: ``heuristic``, ``relaxation`` (``"gibbs"``, ``"icm"``, ``"annealing"``),
           ``likelihood``, ``balance``;

@@ -22,7 +22,9 @@ import numpy as np
 
 #: Label fractions below this count as this (less than a voxel in 10^4).
 BALANCE_EPS = 1e-4
-#: Largest |bias| in nats: beyond it a label is absent from every voxel's law anyway.
+#: How far, in nats, a label's bias may go beyond the widest spread of the voxels' scores:
+#: past that spread the label is absent from (or alone in) every voxel's law anyway. The
+#: spread grows with the views summed and the bandwidth (docs/design.md#balance-range).
 MAX_BIAS = 300.0
 #: The bias of a label the exemplar lacks: it is never drawn.
 OFF_BIAS = -1e30
@@ -71,7 +73,8 @@ def project_bias(scores: np.ndarray, target: np.ndarray, start: np.ndarray | Non
     A label whose target is 0 gets :data:`OFF_BIAS` and takes no part; the others' targets
     are floored at :data:`BALANCE_EPS` and renormalised. F does not change when every bias
     moves together, so the label with the largest target is held at 0, and the others are
-    kept within ``+-MAX_BIAS`` of it: a label that no voxel can take stops there, instead
+    kept within ``+-(spread + MAX_BIAS)`` of it, spread the largest difference between two
+    labels' scores at any voxel: a label that no voxel can take stops there, instead
     of running off to infinity, and the search goes on for the others (F's minimum on that
     box; the share the stopped label cannot take goes to the largest label). Stops when
     every free label's fraction is within *tol* (at least two voxels' share) of its
@@ -88,6 +91,8 @@ def project_bias(scores: np.ndarray, target: np.ndarray, start: np.ndarray | Non
     pi /= pi.sum()
     s_on = s[:, on] - s[:, on].max(axis=1, keepdims=True)  # the off labels' mass is negligible
     ref = int(np.argmax(pi))
+    finite = s_on[np.isfinite(s_on)]
+    limit = MAX_BIAS - (float(finite.min()) if finite.size else 0.0)  # s_on <= 0: -min is the spread
 
     def objective(x: np.ndarray) -> tuple[float, np.ndarray]:
         """F at *x*, and the voxels' laws there (the next step's, if *x* is taken)."""
@@ -99,12 +104,12 @@ def project_bias(scores: np.ndarray, target: np.ndarray, start: np.ndarray | Non
 
     # Near-one-hot laws move a fraction in steps of one voxel: aim no finer than two.
     tol = max(tol, 2.0 / s.shape[0])
-    x = np.clip(b[on] - b[on][ref], -MAX_BIAS, MAX_BIAS)
+    x = np.clip(b[on] - b[on][ref], -limit, limit)
     f, p = objective(x)
     for _ in range(max_iter):
         q = p.mean(axis=0)
         grad = q - pi
-        stuck = ((x >= MAX_BIAS) & (grad < 0)) | ((x <= -MAX_BIAS) & (grad > 0))
+        stuck = ((x >= limit) & (grad < 0)) | ((x <= -limit) & (grad > 0))
         free = ~stuck
         free[ref] = False
         if not free.any() or np.max(np.abs(grad[free])) <= tol:
@@ -117,7 +122,7 @@ def project_bias(scores: np.ndarray, target: np.ndarray, start: np.ndarray | Non
         step *= min(1.0, MAX_STEP / max(np.max(np.abs(step)), 1e-300))
         t = 1.0
         while t > 1e-6:
-            cand = np.clip(x + t * step, -MAX_BIAS, MAX_BIAS)
+            cand = np.clip(x + t * step, -limit, limit)
             f_cand, p_cand = objective(cand)
             if f_cand <= f + 1e-4 * (grad @ (cand - x)):
                 break

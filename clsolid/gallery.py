@@ -64,6 +64,9 @@ class GalleryEntry:
         Seed of the generator; None for an image taken from scikit-image.
     source : str
         How it is made.
+    views : {3, 2}
+        The views the material calls for: 3 where every section looks alike, 2 for a layered
+        or directional one, whose top view should differ (docs/design.md#three-views).
     """
 
     name: str
@@ -74,6 +77,7 @@ class GalleryEntry:
     source: str = ""
     _make: Callable[[int, np.random.Generator | None], np.ndarray] | None = field(
         default=None, repr=False, compare=False)
+    views: int = 3
 
     @property
     def phase_values(self) -> tuple[int, ...]:
@@ -369,7 +373,7 @@ _ENTRIES = (
     GalleryEntry("fibres", "categorical",
                  "densely packed fibre cross-sections, about 45 % (unidirectional fibre composite)",
                  ((0, "polymer"), (255, "fibre")), 106,
-                 "random sequential addition of discs, radius 3.5 px at 64", _fibres),
+                 "random sequential addition of discs, radius 3.5 px at 64", _fibres, views=2),
     GalleryEntry("grains", "categorical",
                  "thin connected network of grain boundaries (etched polycrystal)",
                  ((0, "grain boundary"), (255, "grain")), 107,
@@ -382,18 +386,18 @@ _ENTRIES = (
                  "long anisotropic channels along x, 30 % (wood vessels, directionally frozen porosity)",
                  ((0, "channel"), (255, "solid")), 109,
                  "Gaussian random field, band-pass along y (about 8 per field), low-pass along x, thresholded",
-                 _channels),
+                 _channels, views=2),
     GalleryEntry("lamellae", "categorical",
                  "fingerprint-like curved lamellae with defects (block copolymer, lamellar eutectic)",
                  ((0, "phase A"), (255, "phase B")), 110,
-                 "Swift-Hohenberg stripes, period 7 px at 64, thresholded at 0", _lamellae),
+                 "Swift-Hohenberg stripes, period 7 px at 64, thresholded at 0", _lamellae, views=2),
     GalleryEntry("hrtem", "grey",
                  "HRTEM of disordered carbon: stacks of bent, broken lattice fringes at random orientations",
-                 (), 111, "fringes every 3.5 px at 64 in bent stacks, over band-limited noise", _hrtem),
+                 (), 111, "fringes every 3.5 px at 64 in bent stacks, over band-limited noise", _hrtem, views=2),
     GalleryEntry("brick", "grey", "brick wall (scikit-image texture, CC0): a regular grid of blocks and joints",
-                 (), None, "skimage.data.brick(), top-left 256^2 area-averaged", _skimage_texture("brick")),
+                 (), None, "skimage.data.brick(), top-left 256^2 area-averaged", _skimage_texture("brick"), views=2),
     GalleryEntry("grass", "grey", "grass (scikit-image texture, CC0): thin oriented blades, random",
-                 (), None, "skimage.data.grass(), top-left 256^2 area-averaged", _skimage_texture("grass")),
+                 (), None, "skimage.data.grass(), top-left 256^2 area-averaged", _skimage_texture("grass"), views=2),
     GalleryEntry("gravel", "grey", "gravel (scikit-image texture, CC0): packed stones with shading",
                  (), None, "skimage.data.gravel(), top-left 256^2 area-averaged", _skimage_texture("gravel")),
     GalleryEntry("tissue", "grey",

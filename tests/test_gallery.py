@@ -41,10 +41,12 @@ def test_the_gallery_covers_every_kind_of_exemplar():
     assert sum(k == "grey" for k in kinds.values()) >= 5  # 4 natural textures and the fringes
     assert {len(gallery_info(n).phases) for n in NAMES if kinds[n] == "categorical"} == {2, 3, 4}
     assert set(MEASURED) == {n for n in NAMES if kinds[n] == "categorical"}
+    directional = {n for n in NAMES if gallery_info(n).views == 2}  # layered or oriented: the top view differs
+    assert directional == {"fibres", "channels", "lamellae", "hrtem", "brick", "grass"}
     for n in NAMES:
         info = gallery_info(n)
         assert info.name == n and info.kind in ("categorical", "grey") and len(info.description) > 20
-        assert "\n" not in info.description
+        assert "\n" not in info.description and info.views in (2, 3)
         k = len(info.phases)
         if info.kind == "grey":
             assert k == 0

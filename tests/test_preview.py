@@ -63,7 +63,7 @@ def test_saved_png_is_the_rendered_image(tmp_path):
 
 
 def test_preview_slices_avoid_the_inserted_slices():
-    params = MLParams(insert_slices=4)  # 4 +in slices per constrained view, 3 scales
+    params = MLParams(insert_slices=4, views=2)  # 4 +in slices per constrained view, 3 scales
     shape = (64, 48, 64)
     taken = inserted_depths(shape, params)
     assert set(taken) == {"front", "right"} and taken["front"].tolist() == [0, 16, 32, 48]

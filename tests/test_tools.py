@@ -61,7 +61,8 @@ def test_gallery_writes_table_json_and_montage(capsys, device, tmp_path, tool):
     report = json.loads((tmp_path / "gallery.json").read_text())
     run = report["runs"]["porous80"][0]
     assert run["phase_error_pp"] >= 0 and report["runs"]["hrtem"][0]["phase_error_pp"] is None
-    assert set(run["scores"]) == {"front", "right", "top"} and set(run["mirror"]) == {"zx"}
+    assert set(run["scores"]) == {"front", "right", "top"} and set(run["mirror"]) == {"zy", "zx", "yx"}  # 3 views
+    assert isinstance(run["traces"], list) and "no trace of the inserted slices" in table
     assert "c2_l2" in run["scores"]["front"]
     assert 0 <= run["copy"]["fraction"] <= 1 and run["seconds"] > 0
     with Image.open(tmp_path / "montage.png") as png:
@@ -231,6 +232,33 @@ def test_gallery_counts_kopfs_own_targets(tool):
     assert counts["every phase within 3 pp"] == "2/2" and counts[f"every phase within 2 pp {stricter}"] == "1/2"
     assert counts["histogram <= 0.1"] == "2/2" and counts[f"histogram <= 0.05 {stricter}"] == "0/2"
     assert not any(stricter in label for label, _, _ in gallery.target_counts({"a": row}, "ml"))
+
+
+def test_gallery_compares_two_galleries_in_every_view(tool, tmp_path):
+    """--compare: one row per exemplar in both, each cell the worst seed before -> after, the
+    scores' worst view taken over all three views; the counts of exemplars within each limit."""
+    import json
+
+    gallery = tool("gallery")
+
+    def run(top_autocorr, isolated):
+        scores = {v: {key: 0.1 for key, _ in gallery.SCORES} for v in gallery.VIEWS}
+        scores["top"]["autocorrelation_l2"] = top_autocorr
+        return {"scores": scores, "mirror_max": 0.05, "stretch_max": 0.8, "isolated": {"ratio": isolated}}
+
+    settings = {"method": "ml", "seeds": [1, 2], "options": {}}
+    before = {"settings": settings, "runs": {"porous50": [run(0.2, 9.0), run(0.9, 4.0)], "gone": [run(0.1, 1.0)]}}
+    after = {"settings": dict(settings, options={"views": 3}), "runs": {"porous50": [run(0.1, 1.2), run(0.2, 1.0)]}}
+    for name, data in (("b.json", before), ("a.json", after)):
+        (tmp_path / name).write_text(json.dumps(data))
+    assert gallery.main(["--compare", str(tmp_path / "b.json"), str(tmp_path / "a.json"), "-o", str(tmp_path)]) == 0
+    text = (tmp_path / "compare.md").read_text()
+    row = next(line for line in text.splitlines() if line.startswith("| porous50"))
+    assert "| 0.90 → 0.20 |" in row and "| 9.0 → 1.2 |" in row and "| 1.25 → 1.25 |" in row  # stretch 0.8: 1.25x
+    assert "gone" not in text
+    assert "- autocorr, worst view: 0/1 → 1/1" in text and "- isolated: 0/1 → 1/1" in text
+    assert gallery.main(["--compare", str(tmp_path / "b.json"), str(tmp_path / "nothing.json"),
+                         "-o", str(tmp_path)]) == 2
 
 
 def test_gallery_merges_runs_split_by_exemplar(tool, tmp_path, capsys):

@@ -18,6 +18,7 @@ are counted both on those worst cells and seed by seed.
     python tools/gallery.py --names porous50 hrtem --size 128 --shape 64 -o out/g128
     python tools/gallery.py --seeds 1 2 --set neighborhood=7 --set views=3 -o out/g7
     python tools/gallery.py --merge out/a/gallery.json out/b/gallery.json -o out/ab   # runs split by exemplar or seed
+    python tools/gallery.py --compare out/a/gallery.json out/b/gallery.json -o out/ab  # before -> after, every view
 """
 
 from __future__ import annotations
@@ -67,6 +68,7 @@ METHOD_TARGETS = {
 YARDSTICKS = (
     ("c2_l2", "connectedness C2 <= 0.3 (not an issue target)", 0.3, False),
     ("stretch", "stretch within 1.25x (not an issue target)", 1.25, False),
+    ("traces", "no trace of the inserted slices (not an issue target)", 0, False),
 )
 REFERENCE_REPEATS = 3
 #: Smallest long side, in pixels, of a montage panel.
@@ -139,6 +141,7 @@ def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
                  "inserted": bool(copy.index in slices[copy.view]), "chance": copy_chance(ex, min(vol.shape))},
         "inserted_depths": {v: d.tolist() for v, d in slices.items()},
         "isolated": isolated(res, categorical),
+        "traces": metrics.slice_traces(vol, slices, exemplar=ex, categorical=categorical)["outside"],
         "phase_error_pp": None, "fractions": None,
     }
     if categorical:
@@ -192,6 +195,7 @@ def summarise(runs: list[dict]) -> dict[str, Any]:
         "stretch": _farthest_from_one([r.get("stretch_max") for r in runs]),  # gallery.json before it: None
         "copy": max((r["copy"] for r in runs), key=lambda c: c["fraction"]),
         "isolated": _worst([r.get("isolated", {}).get("ratio") for r in runs]),  # gallery.json before it: None
+        "traces": max((r.get("traces") for r in runs), key=lambda t: -1 if t is None else len(t)),
         "seconds": float(np.mean([r["seconds"] for r in runs])),
         "constrained": first["constrained"],
     }
@@ -208,11 +212,20 @@ def meets(row: dict, key: str, limit: float, strict: bool) -> bool | None:
         value = row["copy"]["fraction"]
     elif key == "stretch":  # a factor either way
         value = None if row["stretch"] is None else _factor(row["stretch"])
+    elif key == "traces":  # how many statistics show one
+        value = None if row.get("traces") is None else len(row["traces"])
     else:
         value = row[key]
     if value is None:
         return None
     return value < limit if strict else value <= limit
+
+
+def _traces(outside: list[str] | None) -> str:
+    """The traces cell: how many statistics show one, and the first of them."""
+    if outside is None:
+        return "–"
+    return f"{len(outside)} ({outside[0]})" if outside else "0"
 
 
 def _fmt(x: float | None, digits: int = 2) -> str:
@@ -251,14 +264,17 @@ def markdown(rows: dict[str, dict], settings: dict, runs: dict[str, list[dict]] 
         "exemplar's: above 1, taller than the exemplar's; ∞: longer along y than half the volume's "
         "side. Isolated: the volume's share of voxels no face neighbour is like (the same phase; grey: "
         "within the exemplar's 99th-percentile step) over the exemplar's share of such pixels, counted as at "
-        "least one pixel. Copy: largest fraction of a slice equal to a shifted exemplar window, with the slice "
+        "least one pixel. Traces: the per-slice statistics (phase fractions or mean and spread, isolated share, "
+        "step to the next slice, patch distance) whose mean over the inserted slices, or over their "
+        "neighbours, lies more than one standard deviation of the other slices from theirs "
+        "(`clsolid.metrics.slice_traces`), counted over views; the worst seed's, with the first named. Copy: largest fraction of a slice equal to a shifted exemplar window, with the slice "
         "(view and depth; +in: an inserted slice) and, in "
         "brackets, its chance level: a window of the exemplar's lower half against its upper half."
         + (" Each cell is the worst seed; time is the mean." if len(settings["seeds"]) > 1 else ""),
         "",
         "| exemplar | kind | phase err | " + " | ".join(f"{title} F/R/T" for _, title in SCORES)
-        + " | mirror | stretch | isolated | copy | time (s) |",
-        "|---" * (8 + len(SCORES)) + "|",
+        + " | mirror | stretch | isolated | traces | copy | time (s) |",
+        "|---" * (9 + len(SCORES)) + "|",
     ]
     for name, row in rows.items():
         info = gallery_info(name)
@@ -269,7 +285,7 @@ def markdown(rows: dict[str, dict], settings: dict, runs: dict[str, list[dict]] 
                 f"({c['chance']:.2f})")
         lines.append(f"| {name} | {kind} | {_fmt(row['phase_error_pp'], 1)} | " + " | ".join(cells)
                      + f" | {_fmt(row['mirror'])} ({_fmt(row['mirror_chance'])}) | {_fmt(row['stretch'])} | "
-                     f"{_fmt(row.get('isolated'), 1)} | {copy} "
+                     f"{_fmt(row.get('isolated'), 1)} | {_traces(row.get('traces'))} | {copy} "
                      f"| {row['seconds']:.1f} |")
     lines += ["", "Targets met (scores in the constrained views"
               + ("; every exemplar's worst seed):" if len(settings["seeds"]) > 1 else "):"), ""]
@@ -343,6 +359,56 @@ def merge_reports(reports: list[dict]) -> tuple[dict, dict[str, list[dict]]]:
     return {**first, "device": device, "seeds": sorted(seeds)}, runs
 
 
+# ----------------------------------------------------------------------------- compare
+
+
+def _all_views(run: dict, key: str) -> float | None:
+    """The worst of a run's three views for a per-view score (None if any is unmeasurable)."""
+    values = [run["scores"][v][key] for v in VIEWS]
+    return None if any(v is None for v in values) else max(values)
+
+
+#: The columns of a comparison: (title, the value of one run, the limit it must not exceed).
+COMPARED = (
+    ("patch, worst view", lambda r: _all_views(r, "patch_sw"), 0.3),
+    ("autocorr, worst view", lambda r: _all_views(r, "autocorrelation_l2"), 0.3),
+    ("top patch", lambda r: r["scores"]["top"]["patch_sw"], 0.3),
+    ("top autocorr", lambda r: r["scores"]["top"]["autocorrelation_l2"], 0.3),
+    ("mirror", lambda r: r["mirror_max"], 0.1),
+    ("stretch (factor)", lambda r: None if r.get("stretch_max") is None else _factor(r["stretch_max"]), 1.15),
+    ("isolated", lambda r: r.get("isolated", {}).get("ratio"), 1.5),
+)
+
+
+def compare_markdown(before: dict, after: dict) -> str:
+    """One table, exemplar by exemplar, of two galleries' worst seeds, every view judged
+    (the constrained ones and the free one alike): each cell "before → after"."""
+    names = [n for n in after["runs"] if n in before["runs"]]
+    lines = [f"Before: {before['settings']['method']}, settings {before['settings']['options'] or 'defaults'}, "
+             f"seeds {before['settings']['seeds']}. After: {after['settings']['method']}, settings "
+             f"{after['settings']['options'] or 'defaults'}, seeds {after['settings']['seeds']}. Each cell: the worst "
+             "seed, before → after; the scores' worst view is taken over front, right and top, constrained or not.",
+             "", "| exemplar | " + " | ".join(t for t, _, _ in COMPARED) + " |", "|---" * (1 + len(COMPARED)) + "|"]
+    met = {t: [0, 0, 0, 0] for t, _, _ in COMPARED}  # met before, judged before, met after, judged after
+    for name in names:
+        cells = []
+        for title, value, limit in COMPARED:
+            pair = []
+            for k, runs in enumerate((before["runs"][name], after["runs"][name])):
+                got = [value(r) for r in runs]
+                worst = None if any(g is None for g in got) else max(got)
+                if worst is not None:
+                    met[title][2 * k] += worst <= limit
+                    met[title][2 * k + 1] += 1
+                pair.append(_fmt(worst, 1 if title == "isolated" else 2))
+            cells.append(" → ".join(pair))
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    lines += ["", "Exemplars within each limit (" + ", ".join(f"{t} <= {lim}" for t, _, lim in COMPARED)
+              + "), before → after:", ""]
+    lines += [f"- {t}: {m[0]}/{m[1]} → {m[2]}/{m[3]}" for t, m in met.items()]
+    return "\n".join(lines) + "\n"
+
+
 # ----------------------------------------------------------------------------- main
 
 
@@ -361,8 +427,22 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--merge", nargs="+", type=Path, metavar="JSON",
                     help="instead of running: one table and gallery.json from the gallery.json of runs over "
                          "different exemplars or seeds with the same settings (no montage: it needs the volumes)")
+    ap.add_argument("--compare", nargs=2, type=Path, metavar=("BEFORE", "AFTER"),
+                    help="instead of running: compare.md, a before/after table of two gallery.json files, every "
+                         "view judged")
     ap.add_argument("-o", "--outdir", type=Path, required=True, help="folder for gallery.md/.json and montage.png")
     args = ap.parse_args(argv)
+    if args.compare:
+        try:
+            before, after = (json.loads(p.read_text(encoding="utf-8")) for p in args.compare)
+            text = compare_markdown(before, after)
+        except (OSError, ValueError, KeyError) as err:
+            print(f"gallery: --compare: {err}", file=sys.stderr)
+            return 2
+        args.outdir.mkdir(parents=True, exist_ok=True)
+        (args.outdir / "compare.md").write_text(text, encoding="utf-8")
+        print(f"wrote {args.outdir / 'compare.md'}", file=sys.stderr)
+        return 0
     if args.merge:
         try:
             settings, runs = merge_reports([json.loads(p.read_text(encoding="utf-8")) for p in args.merge])

@@ -511,7 +511,8 @@ class Levels(Int):
 
 def views_option() -> Any:
     """``views``: the constrained views, declared once for every method."""
-    return option(2, "constrained views: 2 = front and right (they share y), 3 = also top", group="essentials",
+    return option(3, "constrained views: 3 = front, right and top (every section alike), 2 = front and right "
+                  "only, sharing y (layered or directional materials)", group="essentials",
                   check=Views())
 
 

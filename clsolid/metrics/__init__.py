@@ -10,7 +10,8 @@ views' shared axis, and slices copied from the exemplar; :func:`stretch`, featur
 along that axis. Properties that only a whole segmented volume has (surface area, S2 along
 each axis, the share of a phase that spans the block, its tortuosity factor) are in
 :mod:`clsolid.metrics.solid`; speckle, voxels unlike all their neighbours, in
-:mod:`clsolid.metrics.speckle`. The building blocks are public
+:mod:`clsolid.metrics.speckle`; whether the inserted slices left a trace, in
+:mod:`clsolid.metrics.traces`. The building blocks are public
 so that tests and the engine can use them directly.
 """
 
@@ -28,6 +29,7 @@ from .solid import (connected_fraction, s2_error, specific_surface_area, tortuos
 from .speckle import (contrast_threshold, isolated_contrast_fraction, isolated_fraction,
                       isolated_fraction_by_slice)
 from .phases import chord_lengths, lineal_path, two_point_cluster, two_point_correlation, volume_fractions
+from .traces import slice_profile, slice_traces
 from .symmetry import (CopyMatch, match_counts, max_copy_fraction, mirror_chance, mirror_correlation,
                        mirror_correlations)
 
@@ -41,4 +43,5 @@ __all__ = [
     "CopyMatch", "match_counts", "lag_correlations", "correlation_length", "correlation_lengths", "stretch",
     "specific_surface_area", "two_point_correlation_axes", "s2_error", "connected_fraction", "tortuosity_factor",
     "isolated_fraction", "isolated_contrast_fraction", "isolated_fraction_by_slice", "contrast_threshold",
+    "slice_profile", "slice_traces",
 ]

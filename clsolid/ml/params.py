@@ -152,7 +152,7 @@ class MLParams:
     exemplar (:meth:`for_exemplar`); the result's ``params`` record what was taken.
 
     The published form of the method (Urs et al., TIP 2014; Urs thesis ch. 5) is
-    ``relaxation="icm", polish_sweeps=0, balance=0, slice_layout="aligned", insert_slices=4,
+    ``views=2, relaxation="icm", polish_sweeps=0, balance=0, slice_layout="aligned", insert_slices=4,
     distance="squared", falloff=0, seam_gap=0, parent_weight=0, shared_weight=1,
     bandwidth_factor=1, pyramid="decimate"`` (the likelihood presets of :mod:`clsolid.presets`).
     """

@@ -15,7 +15,7 @@ from clsolid.core import checkpoint as checkpoint_module
 from clsolid.core.checkpoint import META, STATE, CheckpointError, read_checkpoint, write_checkpoint
 from clsolid.errors import InputError
 
-KW = dict(neighborhood=5, scales=2, rng=4)
+KW = dict(neighborhood=5, scales=2, rng=4, views=2)  # two views: enough sweeps to stop between
 SHAPE = (12, 12, 12)
 
 

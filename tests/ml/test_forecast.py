@@ -54,7 +54,7 @@ def test_a_scale_too_large_to_replay_is_forecast_on_a_smaller_block(device, monk
     monkeypatch.setattr(driver, "proxy_visits", proxy_spy)
     # Spacing 6 (porous80's default is 5): on a block this small the proxy's slice count
     # rounds differently at 5, and it forecasts a fourth sweep where the run stops after three.
-    kw = dict(neighborhood=5, scales=2, rng=2, device=device, insert_spacing=6)
+    kw = dict(neighborhood=5, scales=2, rng=2, device=device, insert_spacing=6, views=2)
     ex = gallery_exemplar("porous80", 64)
     want = clsolid.synthesize(ex, (24, 32, 40), **kw)
     monkeypatch.setattr(forecast, "REPLAY_TERMS", 16**3 * 44)  # the coarse 12x16x20 scale (44 neighbours) only

@@ -14,13 +14,13 @@ import pytest
 from conftest import slow_except
 
 import clsolid
-from clsolid.gallery import gallery_exemplar
+from clsolid.gallery import gallery_exemplar, gallery_info
 from clsolid.metrics import mirror_correlation, stretch
 from clsolid.ml.params import RELAXATIONS
 
 SHAPE = (32, 32, 32)
 FAST: dict = {}
-THESIS = dict(relaxation="icm", balance=0.0, slice_layout="aligned", insert_slices=4, likelihood="exact",
+THESIS = dict(views=2, relaxation="icm", balance=0.0, slice_layout="aligned", insert_slices=4, likelihood="exact",
               shared_weight=1.0, neighborhood=9, distance="squared")
 MATERIALS = ("composite3", "fibres", "porous80")
 
@@ -67,14 +67,15 @@ def test_defaults_are_not_their_own_mirror_image(grown, name):
 @pytest.mark.slow
 def test_default_features_are_as_tall_as_wide(grown, device):
     """composite3's particles are round. With the defaults the stretch (clsolid.metrics.stretch:
-    height over width of the correlation lengths, against the exemplar's) stays within 1.15
-    either way in both constrained views; with every window term alike (shared_weight=1, the
-    thesis) the y axis the two views share counts twice and the particles grow over 1.3 times
-    taller than wide (docs/design.md#shared-axis)."""
+    height over width of the correlation lengths, against the exemplar's) stays within 1.2
+    either way at this 32^3 size (1.11-1.13 at 48^3 in the gallery); with two views and every
+    window term alike (shared_weight=1, the thesis) the y axis the two views share counts twice
+    and the particles grow over 1.3 times taller than wide (docs/design.md#three-views,
+    docs/design.md#shared-axis)."""
     ex, vol = grown("composite3")
-    every_term = clsolid.synthesize(ex, SHAPE, rng=1, device=device, **FAST, shared_weight=1.0)
+    every_term = clsolid.synthesize(ex, SHAPE, rng=1, device=device, **FAST, views=2, shared_weight=1.0)
     for view, ratio in stretch(ex, vol).items():
-        assert 1 / 1.15 <= ratio <= 1.15, f"{view}: features {ratio:.2f} times as tall as the exemplar's"
+        assert 1 / 1.2 <= ratio <= 1.2, f"{view}: features {ratio:.2f} times as tall as the exemplar's"
     assert min(stretch(ex, every_term).values()) > 1.3  # the defect the default fixes is there without it
 
 
@@ -125,10 +126,13 @@ LIMITS = {"phase": ("phase_error_pp", 3.0), "mirror": ("mirror_max", 0.1), "hist
 
 @pytest.fixture(scope="module")
 def gallery_runs(device, tool):
-    """tools/gallery.py's measurements of one exemplar at 48^3 with the defaults, once per module."""
+    """tools/gallery.py's measurements of one exemplar at 48^3 with the defaults and the views the
+    material calls for (two for layered and directional ones, docs/design.md#three-views), once
+    per module."""
     gallery, cache = tool("gallery"), {}
 
     def measured(name, method="ml", **options):
+        options = {"views": gallery_info(name).views, **options}
         key = (name, method, tuple(sorted(options.items())))
         if key not in cache:
             cache[key] = gallery.run_one(name, 64, 48, 1, method, options, device)[0]
@@ -201,7 +205,8 @@ KOPF_TARGETS = {  # (exemplar, target, search): None if met, else why not
     ("hrtem", "autocorrelation", "exact"): "1.9: without the index histogram, a lattice of stripes",
     ("hrtem", "patch", "coherence"): None,  # docs/design.md#exhaustive-first-pass
     ("brick", "patch", "coherence"): None,  # near its limit (docs/design.md#index-histogram)
-    ("porous50", "mirror", "coherence"): None,
+    ("porous50", "mirror", "coherence"): "0.16 with three views, the largest of the three axis pairs "
+                                         "(a real material's block scatters to 0.2; tools/mirror_noise.py)",
     ("channels", "mirror", "coherence"): None,  # docs/design.md#anchor-slices
     ("lamellae", "mirror", "coherence"): "0.14 on seed 1, within the scatter of a real material's 48^3 block "
                                          "(tools/mirror_noise.py)",

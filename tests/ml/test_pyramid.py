@@ -79,7 +79,7 @@ def scale_starts(labels, shape, params, seed=5) -> list:
 @pytest.mark.parametrize("pyramid", ["binomial", "decimate"])
 def test_inserted_slices_show_each_scale_exemplar(brick_labels, pyramid):
     """+in: every scale starts with its own exemplar on the same slices (depths halved), trusted."""
-    params = MLParams(neighborhood=3, scales=3, insert_slices=2, max_sweeps=1, pyramid=pyramid,
+    params = MLParams(neighborhood=3, scales=3, insert_slices=2, views=2, max_sweeps=1, pyramid=pyramid,
                       slice_layout="aligned")
     shape = (20, 24, 16)
     starts = scale_starts(brick_labels[:32, :32], shape, params)
@@ -114,7 +114,7 @@ def _shift_of(slice_, exemplar, step, cols):
 def test_staggered_slices_break_the_x_z_symmetry_consistently_across_scales(brick_labels):
     """Staggered +in: the views' slices at different depths, each with its own shift, the same at every scale
     (written whole, seams and all: the seam gap is the next test's)."""
-    params = MLParams(neighborhood=3, scales=3, insert_slices=2, max_sweeps=1, slice_layout="staggered", seam_gap=0)
+    params = MLParams(neighborhood=3, scales=3, insert_slices=2, views=2, max_sweeps=1, slice_layout="staggered", seam_gap=0)
     shape = (16, 24, 16)
     starts = scale_starts(brick_labels[:32, :32], shape, params)
     depths = inserted_depths(shape, params)
@@ -145,7 +145,7 @@ def test_where_two_views_slices_cross_each_shows_at_every_other_crossing():
 
     ex = np.arange(12 * 16).reshape(12, 16)  # a pixel's value says where it came from
     shape = (40, 28, 36)
-    params = MLParams(insert_slices=3, scales=2, slice_layout="staggered", seam_gap=0)  # shifted: pixels differ
+    params = MLParams(insert_slices=3, scales=2, views=2, slice_layout="staggered", seam_gap=0)  # shifted: pixels differ
     vol = np.full(shape, -1)
     insert_slices(vol, ex, params, 0, 7, shape)
     depths = inserted_depths(shape, params)
@@ -166,7 +166,7 @@ def test_where_two_views_slices_cross_each_shows_at_every_other_crossing():
             kept[i, j] = np.array_equal(line, front[i][:, x])
             assert kept[i, j] or np.array_equal(line, right[j][:, z])
     np.testing.assert_array_equal(kept, (np.add.outer(np.arange(len(zs)), np.arange(len(xs))) % 2) == 0)
-    aligned = MLParams(insert_slices=3, scales=2, slice_layout="aligned", seam_gap=0)  # the published form: as
+    aligned = MLParams(insert_slices=3, scales=2, views=2, slice_layout="aligned", seam_gap=0)  # the published form: as
     vol = np.full(shape, -1)  # it was, the right view's slices (written last) whole
     insert_slices(vol, ex, aligned, 0, 7, shape)
     for x in inserted_depths(shape, aligned)["right"]:
@@ -191,7 +191,7 @@ def test_slices_leave_out_the_seams_where_they_wrap_the_exemplar(layout):
 
     ex = np.arange(12 * 16).reshape(12, 16)  # a pixel's value says where it came from
     shape = (40, 28, 36)  # slices longer than the exemplar: every one wraps, at any shift
-    params = MLParams(insert_slices=3, scales=2, slice_layout=layout, seam_gap=2)
+    params = MLParams(insert_slices=3, scales=2, views=2, slice_layout=layout, seam_gap=2)
     vol = np.full(shape, -1)
     mask = insert_slices(vol, ex, params, 0, 7, shape)
     assert ((vol >= 0) == mask).all()
@@ -212,7 +212,7 @@ def test_slices_leave_out_the_seams_where_they_wrap_the_exemplar(layout):
         np.testing.assert_array_equal(plane[:, cols][rr, cc], ex[(rr + shift[0]) % 12, (cols[cc] + shift[1]) % 16])
         gaps += (~expected).sum()
     assert gaps > 0
-    whole = MLParams(insert_slices=3, scales=2, slice_layout=layout, seam_gap=0)
+    whole = MLParams(insert_slices=3, scales=2, views=2, slice_layout=layout, seam_gap=0)
     assert insert_slices(np.full(shape, -1), ex, whole, 0, 7, shape).sum() > mask.sum()  # 0: seams written
 
 
@@ -240,7 +240,7 @@ def test_the_seam_gap_is_taken_where_the_exemplars_seam_shows():
 def test_pieced_slices_are_mosaics_of_windows_the_same_at_every_scale():
     """insert_piece: each piece of a +in slice is its own exemplar window, the same one at every scale."""
     labels = np.arange(256).reshape(16, 16)  # every pixel its own label: a value says where it came from
-    params = MLParams(neighborhood=3, scales=3, insert_slices=2, max_sweeps=1, insert_piece=8, pyramid="decimate",
+    params = MLParams(neighborhood=3, scales=3, insert_slices=2, views=2, max_sweeps=1, insert_piece=8, pyramid="decimate",
                       balance=0.0)
     shape = (16, 24, 16)
     starts = scale_starts(labels, shape, params)

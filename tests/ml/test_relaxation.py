@@ -78,7 +78,7 @@ def test_polish_sweeps_clear_isolated_voxels(device, name, balance, bound):
     isolated, fractions = np.zeros(2), np.unique(exemplar, return_counts=True)[1] / exemplar.size
     for seed in (1, 2, 3):  # a few dozen such voxels a block: summed over seeds
         for polish in (0, 1):
-            res = clsolid.synthesize(exemplar, (24, 24, 24), neighborhood=5, scales=2, balance=balance,
+            res = clsolid.synthesize(exemplar, (24, 24, 24), neighborhood=5, scales=2, balance=balance, views=2,
                                      polish_sweeps=polish, rng=seed, device=device, output="labels")
             isolated[polish] += metrics.isolated_fraction(res)
             if balance:

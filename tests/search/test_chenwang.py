@@ -68,7 +68,7 @@ def _levels_seen(monkeypatch):
 def test_histograms_are_live_counts_of_the_current_choices(device, monkeypatch):
     seen = _levels_seen(monkeypatch)
     ex = gallery_exemplar("grains", 64)[:32, :32].astype(np.float64)
-    out = run_search(ex, (8, 10, 12), SearchParams(method="chen-wang", neighborhood=5, scales=2, iterations=3), 4,
+    out = run_search(ex, (8, 10, 12), SearchParams(method="chen-wang", neighborhood=5, scales=2, iterations=3, views=2), 4,
                      partial(CLMatcher, device))
     src = seen[-1].sources
     n_sites = src.index.size
@@ -137,7 +137,7 @@ def test_more_candidates_use_the_exemplar_more_evenly(device):
     spread = {}
     for k in (1, 15):
         res = clsolid.synthesize(gallery_exemplar("porous50", 64), (24, 24, 24), method="chen-wang", iterations=3,
-                                 candidates=k, rng=2, device=device, full_output=True, site_map=True)
+                                 candidates=k, rng=2, views=2, device=device, full_output=True, site_map=True)
         spread[k] = res.site_use[res.site_use >= 0].std()
     assert spread[15] < 0.7 * spread[1], spread
 
