@@ -281,7 +281,9 @@ class CLMatcher:
         self._layouts: dict[bytes, _Layout] = {}
         self._layout = self._layout_of(_weights(weights, self.dim))
         mf = cl.mem_flags
-        self._queries = cl.Buffer(device.context, mf.READ_ONLY, self.max_batch * self.dim * 4)
+        # READ_WRITE: the gather kernels write the queries here on the device (voxel_queries,
+        # project_queries), and a kernel's write to a READ_ONLY buffer is undefined in OpenCL
+        self._queries = cl.Buffer(device.context, mf.READ_WRITE, self.max_batch * self.dim * 4)
         self._site = cl.Buffer(device.context, mf.READ_WRITE, self.max_batch * MAX_K * 4)
         self._dist = cl.Buffer(device.context, mf.WRITE_ONLY, self.max_batch * MAX_K * 4)
 
