@@ -16,7 +16,7 @@ are counted both on those worst cells and seed by seed.
 
     python tools/gallery.py -o out/gallery                        # every exemplar, 64^2 -> 48^3
     python tools/gallery.py --names porous50 hrtem --size 128 --shape 64 -o out/g128
-    python tools/gallery.py --seeds 1 2 --set neighborhood=7 --set views=3 -o out/g7
+    python tools/gallery.py --seeds 1 2 --set neighborhood=7 --set views=2 -o out/g7
     python tools/gallery.py --merge out/a/gallery.json out/b/gallery.json -o out/ab   # runs split by exemplar or seed
     python tools/gallery.py --compare out/a/gallery.json out/b/gallery.json -o out/ab  # before -> after, every view
 """
@@ -395,8 +395,7 @@ def compare_markdown(before: dict, after: dict) -> str:
         for title, value, limit in COMPARED:
             pair = []
             for k, runs in enumerate((before["runs"][name], after["runs"][name])):
-                got = [value(r) for r in runs]
-                worst = None if any(g is None for g in got) else max(got)
+                worst = _worst([value(r) for r in runs])
                 if worst is not None:
                     met[title][2 * k] += worst <= limit
                     met[title][2 * k + 1] += 1

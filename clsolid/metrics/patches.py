@@ -40,6 +40,13 @@ def usable_scales(shape: tuple[int, int], patch: int = PATCH_SIZE,
     return tuple(s for s in scales if min(shape) // s >= patch + 1)
 
 
+def shared_scales(exemplar_shape: tuple[int, int], slice_shape: tuple[int, int], patch: int = PATCH_SIZE,
+                  scales: tuple[int, ...] = SCALES) -> tuple[int, ...]:
+    """The *scales* usable (:func:`usable_scales`) on the exemplar and on the slices alike."""
+    both = set(usable_scales(slice_shape, patch, scales))
+    return tuple(s for s in usable_scales(exemplar_shape, patch, scales) if s in both)
+
+
 def _downsample(stack: np.ndarray, factor: int) -> np.ndarray:
     n, h, w = stack.shape
     h2, w2 = h // factor, w // factor
@@ -109,8 +116,7 @@ def patch_distance(exemplar: Any, slices: Any, *, scales: tuple[int, ...] = SCAL
     ex = as_image(exemplar, "exemplar")
     sl = as_stack(slices, "slices")
     patch = check_int(patch, "patch", 1)
-    both = set(usable_scales(sl.shape[1:], patch, scales))
-    use = tuple(s for s in usable_scales(ex.shape, patch, scales) if s in both)
+    use = shared_scales(ex.shape, sl.shape[1:], patch, scales)
     if not use:
         raise InputError(f"no scale in scales={scales!r} leaves {patch + 1} pixels per side of "
                          f"exemplar {ex.shape} and slices {sl.shape[1:]}")
@@ -119,3 +125,25 @@ def patch_distance(exemplar: Any, slices: Any, *, scales: tuple[int, ...] = SCAL
     qa = patch_quantiles(ex[None], use, gen, mean, std, patch)
     qb = patch_quantiles(sl, use, gen, mean, std, patch)
     return float(np.mean(quantile_distances(qa, qb)))
+
+
+def patch_distance_by_slice(exemplar: Any, slices: Any, *, scales: tuple[int, ...] = SCALES,
+                            patch: int = PATCH_SIZE, rng: Any = 0) -> np.ndarray:
+    """:func:`patch_distance` of every slice on its own, the exemplar's quantiles taken once.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n,)`` float64 in slice order; NaN for every slice where no scale fits both.
+    """
+    ex = as_image(exemplar, "exemplar").astype(np.float64, copy=False)
+    sl = as_stack(slices, "slices")
+    patch = check_int(patch, "patch", 1)
+    use = shared_scales(ex.shape, sl.shape[1:], patch, scales)
+    if not use:
+        return np.full(sl.shape[0], np.nan)
+    gen = np.random.default_rng(rng)
+    mean, std = float(ex.mean()), float(ex.std())
+    ref = patch_quantiles(ex[None], use, gen, mean, std, patch)
+    return np.array([np.mean(quantile_distances(ref, patch_quantiles(one[None], use, gen, mean, std, patch)))
+                     for one in sl])

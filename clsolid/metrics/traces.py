@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import InputError
 from ._common import as_volume, check_views, is_integer_valued, view_slices
-from .patches import PATCH_SIZE, patch_quantiles, quantile_distances, usable_scales
+from .patches import patch_distance_by_slice
 from .speckle import isolated_fraction_by_slice
 
 #: Slices this far from an inserted depth count as traced: the slice itself and its neighbours.
@@ -59,15 +59,15 @@ def slice_profile(volume: Any, view: str, *, exemplar: Any = None, categorical: 
     (view,) = check_views((view,), "view")
     stack = view_slices(vol, view).astype(np.float64)
     ref = vol if exemplar is None else np.asarray(exemplar)
+    values = np.unique(ref)
     if categorical is None:
-        values = np.unique(ref)
         categorical = values.size <= 16 and is_integer_valued(values)
     out: dict[str, np.ndarray] = {}
     nxt = np.roll(stack, -1, axis=0)
     if categorical:
-        if exemplar is not None and not np.isin(np.unique(vol), np.unique(ref)).any():
+        if exemplar is not None and not np.isin(np.unique(vol), values).any():
             raise InputError("the volume holds none of the exemplar's values: give both as labels or both as values")
-        for label in np.unique(ref):
+        for label in values:
             out[f"fraction {label}"] = np.mean(stack == label, axis=(1, 2))
         out["isolated"] = isolated_fraction_by_slice(vol, view)
         out["step"] = np.mean(stack != nxt, axis=(1, 2))
@@ -78,21 +78,8 @@ def slice_profile(volume: Any, view: str, *, exemplar: Any = None, categorical: 
         scale = float(vol.std()) or 1.0
         out["step"] = np.mean(np.abs(stack - nxt), axis=(1, 2)) / scale
     if exemplar is not None:
-        out["patch"] = _patch_by_slice(np.asarray(exemplar, np.float64), stack)
+        out["patch"] = patch_distance_by_slice(exemplar, stack, scales=(1, 2))
     return out
-
-
-def _patch_by_slice(exemplar: np.ndarray, stack: np.ndarray) -> np.ndarray:
-    """Each slice's patch distance to the exemplar, the exemplar's quantiles taken once."""
-    scales = tuple(s for s in usable_scales(exemplar.shape, PATCH_SIZE, (1, 2))
-                   if s in usable_scales(stack.shape[1:], PATCH_SIZE, (1, 2)))
-    if not scales:
-        return np.full(stack.shape[0], np.nan)
-    mean, std = float(exemplar.mean()), float(exemplar.std())
-    gen = np.random.default_rng(0)
-    ref = patch_quantiles(exemplar[None], scales, gen, mean, std)
-    return np.array([np.mean(quantile_distances(ref, patch_quantiles(sl[None], scales, gen, mean, std)))
-                     for sl in stack])
 
 
 def depth_distance(n: int, depths: Any) -> np.ndarray:

@@ -93,3 +93,14 @@ def test_bad_input_is_refused():
     with pytest.raises(InputError, match="none of the exemplar's values"):
         slice_traces(vol, {"front": [0]}, exemplar=np.full((12, 12), 7, np.uint8) + np.eye(12, dtype=np.uint8))
     assert slice_traces(vol, {"front": []})["within"]  # no inserted slices: nothing to find
+
+
+def test_patch_distance_by_slice_is_each_slices_patch_distance():
+    from clsolid.metrics import patch_distance
+    from clsolid.metrics.patches import patch_distance_by_slice
+
+    rng = np.random.default_rng(3)
+    exemplar, stack = rng.random((40, 40)), rng.random((3, 24, 24))  # small: no patch is subsampled
+    got = patch_distance_by_slice(exemplar, stack, scales=(1, 2))
+    np.testing.assert_allclose(got, [patch_distance(exemplar, s, scales=(1, 2)) for s in stack], rtol=1e-12)
+    assert np.isnan(patch_distance_by_slice(exemplar, rng.random((2, 4, 4)))).all()  # no scale fits 4 x 4
