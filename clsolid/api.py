@@ -95,15 +95,53 @@ def _check_output(output: Any) -> None:
 
 
 def _load(exemplar: Any, levels: int | None, rng: Any):
-    """The exemplar image, its level map and the seed, as every method takes them."""
-    from .exemplar import level_map, load_exemplar
+    """The exemplar image (or one per view, a dict), its level map and the seed, as every method takes them."""
+    from .exemplar import level_map, load_exemplars
 
-    image = load_exemplar(exemplar)
+    image = load_exemplars(exemplar)
     levels_of = level_map(image, levels)
     if levels_of.values.size < 2:
         warnings.warn(f"the exemplar is constant (every pixel {levels_of.values[0].item()!r}): the volume will be too",
                       ExemplarWarning, stacklevel=3)
+    if isinstance(image, dict) and is_categorical(levels_of.values.size, levels_of.exact):
+        for view, labels in levels_of.labels.items():  # one phase set: a phase a view lacks could never be drawn
+            missing = np.setdiff1d(np.arange(levels_of.values.size), labels)
+            if missing.size:
+                names = ", ".join(repr(v.item()) for v in levels_of.values[missing])
+                raise InputError(f"the {view} exemplar lacks phase {names}, which the other views' exemplars hold: "
+                                 "the exemplars of a segmented material must share one phase set")
     return image, levels_of, resolve_seed(rng)
+
+
+def _per_view(image: Any, run_params: MLParams | SearchParams, options: dict, given: bool):
+    """*run_params* with the views of an exemplar per view (*image* a dict by view); refused where
+    the views were given (in *options*, or as *given* parameters) and name others."""
+    if not isinstance(image, dict):
+        return run_params
+    from .core.views import view_set, views_value
+
+    names = tuple(image)
+    if ("views" in options or given) and view_set(run_params.views) != names:
+        raise InputError(f"views={run_params.views!r} but the exemplars are for {' and '.join(names)}: "
+                         "leave views out, and the views with an exemplar are the ones constrained")
+    return _replace(run_params, {"views": views_value(names)})
+
+
+def _seam(image: Any) -> float:
+    """The largest seam ratio of the exemplar or exemplars (:func:`clsolid.core.slices.seam_ratio`)."""
+    return max(seam_ratio(im) for im in (image.values() if isinstance(image, dict) else [image]))
+
+
+def _described(image: Any) -> str:
+    """The exemplar's shape for a log line: ``a (64, 64) exemplar``, or each view's."""
+    if isinstance(image, dict):
+        return "exemplars " + ", ".join(f"{v} {im.shape}" for v, im in image.items())
+    return f"a {image.shape} exemplar"
+
+
+def _shape_of(image: Any) -> tuple[int, int]:
+    """The exemplar's shape; with one per view, the largest's."""
+    return max((im.shape for im in image.values()), key=np.prod) if isinstance(image, dict) else image.shape
 
 
 def synthesize(
@@ -125,10 +163,16 @@ def synthesize(
 
     Parameters
     ----------
-    exemplar : ndarray, str or path
+    exemplar : ndarray, str, path or dict
         A 2D grey or segmented image (uint8, uint16 or float), a ``.png``, ``.tif`` or
         ``.npy`` file, or a built-in name (``"brick"``, ``"grass"``, ``"gravel"``; other
-        sizes: :func:`clsolid.exemplar.builtin_exemplar`).
+        sizes: :func:`clsolid.exemplar.builtin_exemplar`). Or one exemplar per view, a dict
+        of two or three of ``"front"`` (the (y, x) plane), ``"right"`` ((y, z)) and ``"top"``
+        ((z, x)), each any of the above: each view then matches its own, a view without
+        one is free, and ``views`` follows the keys. They may differ in size; grey ones are
+        quantised on one shared set of levels, and segmented ones must share one phase set.
+        ``"ml"`` sums over them exactly (``likelihood="exact"``), ``"kopf"`` and ``"wl"``
+        search them whole (``search="exact"``); ``"chen-wang"`` takes one exemplar.
     shape : tuple of 3 ints
         ``(Z, Y, X)`` size of the block. The block is toroidal (it tiles).
     method : {"ml", "wl", "kopf", "chen-wang"}
@@ -205,12 +249,15 @@ def synthesize(
         if backend is not None:
             raise InputError(f"backend= is the likelihood method's (tiles, Dask, scratch, checkpoints); {method} "
                              "runs in one piece on one device")
-        return _synthesize_search(exemplar, shape, run_params, rng, device, progress, output, full_output, site_map)
+        return _synthesize_search(exemplar, shape, run_params, rng, device, progress, output, full_output, site_map,
+                                  given=set(options) | ({"search", "views"} if params is not None else set()))
     if site_map:
         raise InputError("site_map=True is the search methods' position histogram; method 'ml' has none")
     run = backend_options(backend)
     image, levels_of, seed = _load(exemplar, run_params.levels, rng)
-    run_params = run_params.for_exemplar(levels_of.values.size, levels_of.exact, seam_ratio(image), image.shape[:2])
+    run_params = _per_view(image, run_params, options, params is not None)
+    run_params = run_params.for_exemplar(levels_of.values.size, levels_of.exact, _seam(image), _shape_of(image),
+                                         per_view=isinstance(image, dict))
     engine = make_backend(device, run)
     hook = None
     if run.checkpoint is not None:
@@ -219,7 +266,7 @@ def synthesize(
         meta = {"method": method, "params": run_params.to_dict(), "shape": list(shape), "seed": seed,
                 "device": engine.name}
         hook = Checkpointer(run.checkpoint, check_every(run.checkpoint_every), meta, image)
-    log.info("synthesising %s from a %s exemplar on %s, seed %d", shape, image.shape, engine.name, seed)
+    log.info("synthesising %s from %s on %s, seed %d", shape, _described(image), engine.name, seed)
     return _run_ml(levels_of, shape, run_params, seed, engine, progress, output, full_output, hook, None)
 
 
@@ -229,8 +276,10 @@ def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_outp
 
     scratch = backend.scratch
     on_disk = scratch is not None and scratch.on_disk
+    labels = levels_of.labels
     check_host_memory(shape, SCRATCH_FOOTPRINT if on_disk else FOOTPRINT,
-                      exemplar_terms(levels_of.labels.shape, params.neighborhood))
+                      sum(exemplar_terms(im.shape, params.neighborhood)
+                          for im in (labels.values() if isinstance(labels, dict) else [labels])))
     if on_disk:
         check_scratch_space(shape, scratch.root)
     try:
@@ -329,9 +378,10 @@ def _large_on(store: Scratch) -> Callable[[tuple, Any], np.ndarray]:
 
 
 def _synthesize_search(exemplar, shape, params: SearchParams, rng, device, progress, output, full_output,
-                       site_map: bool):
+                       site_map: bool, given: set[str] = frozenset()):
     """:func:`synthesize` for the fixed-neighbourhood search methods (``"wl"``, ``"kopf"``, ``"chen-wang"``)."""
-    from .search.driver import run_search
+    from .exemplar import pooled
+    from .search.driver import check_per_view, run_search
     from .search.match import CLMatcher, ReferenceMatcher
 
     method = params.method
@@ -342,8 +392,16 @@ def _synthesize_search(exemplar, shape, params: SearchParams, rng, device, progr
         raise InputError("site_map=True needs full_output=True (the map is SynthesisResult.site_use)")
     image, levels_of, seed = _load(exemplar, params.levels, rng)
     check_host_memory(shape, SEARCH_FOOTPRINT)
-    grey = levels_of.to_values(levels_of.labels).astype(np.float64)
-    n_values = np.unique(grey).size
+    values = levels_of.to_values(levels_of.labels)
+    if isinstance(image, dict):  # each view searches its own exemplar, whole (check_per_view)
+        params = _per_view(image, params, {}, "views" in given)
+        if params.search == "coherence" and "search" not in given:
+            params = _replace(params, {"search": "exact", "seed_components": None, "coherence_levels": None})
+        check_per_view(params, site_map)
+        grey = {v: im.astype(np.float64) for v, im in values.items()}
+    else:
+        grey = values.astype(np.float64)
+    n_values = np.unique(pooled(grey)).size
     categorical = is_categorical(n_values, levels_of.exact)
     params = params.for_exemplar(n_values, categorical)
     if is_reference(device):
@@ -353,7 +411,7 @@ def _synthesize_search(exemplar, shape, params: SearchParams, rng, device, progr
 
         dev = select_device(device)
         name, make_matcher = dev.name, partial(CLMatcher, dev)
-    log.info("synthesising %s from a %s exemplar with %s on %s, seed %d", shape, image.shape, method, name, seed)
+    log.info("synthesising %s from %s with %s on %s, seed %d", shape, _described(image), method, name, seed)
     vol, timings, use, source = run_search(grey, shape, params, seed, make_matcher, progress, count_sites=site_map,
                                            categorical=categorical)
     if params.keeps_exemplar_values(categorical):  # exact: each voxel is one of the values

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import skimage.data
 
+from .core.views import VIEW_ORDER
 from .core.geometry import window_grid  # noqa: F401 (where the exemplar's windows lie)
 from .errors import InputError
 from .volumeio import VOLUME_WRITE_SUFFIXES, _read_any
@@ -230,6 +231,61 @@ def _scaled_floor(image: np.ndarray, lo: Any, hi: Any, levels: int) -> np.ndarra
     return np.floor(t * levels)
 
 
+#: The views an exemplar per axis may be given for (:mod:`clsolid.core.views`).
+VIEW_KEYS = VIEW_ORDER
+
+
+def load_exemplars(source: Any, *, builtin_size: int = 64) -> np.ndarray | dict[str, np.ndarray]:
+    """Load one exemplar, or one per view.
+
+    Parameters
+    ----------
+    source : numpy.ndarray, str, os.PathLike or dict
+        One exemplar (:func:`load_exemplar`), or a dict ``{view: exemplar}`` of two or three
+        of ``"front"``, ``"right"``, ``"top"``, each anything :func:`load_exemplar` takes.
+    builtin_size : int, default 64
+        As for :func:`load_exemplar`.
+
+    Returns
+    -------
+    numpy.ndarray or dict
+        The image, or ``{view: image}`` in :data:`VIEW_KEYS` order. The images may differ in
+        size, not in dtype.
+
+    Raises
+    ------
+    InputError
+        What :func:`load_exemplar` refuses (the message names the view), a key that is no
+        view, fewer than two views, or images of different dtypes.
+    """
+    if not isinstance(source, dict):
+        return load_exemplar(source, builtin_size=builtin_size)
+    unknown = [k for k in source if k not in VIEW_KEYS]
+    if unknown:
+        raise InputError(f"exemplar keys {unknown!r} are not views; use two or three of {', '.join(VIEW_KEYS)}")
+    if len(source) < 2:
+        raise InputError(f"an exemplar per view needs two or three of {', '.join(VIEW_KEYS)}, got {list(source)}; "
+                         "pass a single exemplar for one material seen alike in every view")
+    images = {}
+    for view in (v for v in VIEW_KEYS if v in source):
+        try:
+            images[view] = load_exemplar(source[view], builtin_size=builtin_size)
+        except InputError as err:
+            raise InputError(f"the {view} exemplar: {err}") from None
+    dtypes = {v: str(im.dtype) for v, im in images.items()}
+    if len(set(dtypes.values())) > 1:
+        raise InputError(f"the views' exemplars must share one dtype, got {dtypes}; convert them to one "
+                         "(e.g. image.astype(np.uint8)) so that their values mean the same")
+    return images
+
+
+def pooled(images: np.ndarray | dict[str, np.ndarray]) -> np.ndarray:
+    """One image, or every view's pixels in one row (their statistics pooled)."""
+    if not isinstance(images, dict):
+        return images
+    return np.concatenate([im.ravel() for im in images.values()])[None, :]
+
+
 def quantise(image: np.ndarray, levels: int | None = 32) -> np.ndarray:
     """Uniformly quantise a grey image to integer labels.
 
@@ -290,8 +346,9 @@ class LevelMap:
 
     Attributes
     ----------
-    labels : numpy.ndarray
-        int32 image of label indices, ``0 <= labels < values.size``.
+    labels : numpy.ndarray or dict
+        int32 image of label indices, ``0 <= labels < values.size`` (one per view, in a
+        dict, for an exemplar per view).
     values : numpy.ndarray
         ``values[i]`` is label ``i`` in the exemplar's own units and dtype.
     exact : bool
@@ -300,12 +357,14 @@ class LevelMap:
         each is the mean of the exemplar pixels quantised to that level.
     """
 
-    labels: np.ndarray
+    labels: np.ndarray | dict[str, np.ndarray]
     values: np.ndarray
     exact: bool
 
-    def to_values(self, labels: np.ndarray) -> np.ndarray:
-        """Map label indices back to the exemplar's values (and dtype)."""
+    def to_values(self, labels: np.ndarray | dict[str, np.ndarray]) -> np.ndarray | dict[str, np.ndarray]:
+        """Map label indices back to the exemplar's values (and dtype); a dict view by view."""
+        if isinstance(labels, dict):
+            return {v: self.values[im] for v, im in labels.items()}
         return self.values[labels]
 
 
@@ -330,13 +389,14 @@ def _bin_means(image: np.ndarray, labels: np.ndarray, levels: int) -> np.ndarray
     return means.astype(image.dtype)
 
 
-def level_map(image: np.ndarray, levels: int | None) -> LevelMap:
+def level_map(image: np.ndarray | dict[str, np.ndarray], levels: int | None) -> LevelMap:
     """Labels of *image* for the engine, and the value each label stands for.
 
     Parameters
     ----------
-    image : numpy.ndarray
-        The exemplar (2D, real, finite).
+    image : numpy.ndarray or dict
+        The exemplar (2D, real, finite), or one per view (:func:`load_exemplars`): their
+        pixels are pooled, so that every view has the same levels, and ``labels`` is a dict.
     levels : int or None
         Most grey levels. ``None`` keeps the 256 levels of a uint8 image.
 
@@ -355,6 +415,11 @@ def level_map(image: np.ndarray, levels: int | None) -> LevelMap:
       and each level's value is the mean of the exemplar pixels in it (an empty level
       gets its bin centre; integer images round the mean).
     """
+    if isinstance(image, dict):  # one level set for every view: their pixels pooled
+        pool = level_map(pooled(image), levels)
+        cuts = np.cumsum([im.size for im in image.values()])[:-1]
+        parts = np.split(pool.labels.ravel(), cuts)
+        return LevelMap({v: p.reshape(im.shape) for (v, im), p in zip(image.items(), parts)}, pool.values, pool.exact)
     if levels is None:
         labels = quantise(image, None)
         return LevelMap(labels, np.arange(256, dtype=np.uint8), True)

@@ -241,7 +241,7 @@ class Preview:
     captions: list[str]
 
 
-def render_preview(exemplar: np.ndarray, volume: np.ndarray, *, depths: dict[str, int] | None = None,
+def render_preview(exemplar: np.ndarray | dict[str, np.ndarray], volume: np.ndarray, *, depths: dict[str, int] | None = None,
                    constrained: Sequence[str] = ("front", "right"), name: str = "exemplar",
                    min_side: int = PREVIEW_MIN_SIDE, cube: bool = True) -> Preview:
     """Lay out the labelled preview of :func:`save_preview` without writing it.
@@ -249,10 +249,13 @@ def render_preview(exemplar: np.ndarray, volume: np.ndarray, *, depths: dict[str
     *name* starts the exemplar's caption; *min_side* is the smallest long side of a panel;
     *cube* adds the last panel, :func:`render_cube` of the block behind the three slices.
     """
-    ex, vol = _check_inputs(exemplar, volume)
+    given = exemplar if isinstance(exemplar, dict) else {"": exemplar}
+    raw, captions = [], []
+    for view, image in given.items():  # one exemplar, or each view's
+        ex, vol = _check_inputs(image, volume)
+        raw.append(ex)
+        captions.append(f"{view + ' ' if view else ''}{name} {ex.shape[0]}x{ex.shape[1]}")
     chosen = _depths(vol, depths)
-    captions = [f"{name} {ex.shape[0]}x{ex.shape[1]}"]
-    raw = [ex]
     for view, axis in DEPTH_AXIS.items():
         raw.append(view_slice(vol, view, chosen[view]))
         mark = ", constrained" if view in constrained else ""
@@ -281,7 +284,7 @@ def render_preview(exemplar: np.ndarray, volume: np.ndarray, *, depths: dict[str
     return Preview(np.asarray(canvas), boxes, captions)
 
 
-def save_preview(path: PathLike, exemplar: np.ndarray, volume: np.ndarray, *,
+def save_preview(path: PathLike, exemplar: np.ndarray | dict[str, np.ndarray], volume: np.ndarray, *,
                  depths: dict[str, int] | None = None,
                  constrained: Sequence[str] = ("front", "right")) -> pathlib.Path:
     """Save the exemplar beside a front, right and top slice of the volume, and the block
@@ -291,8 +294,9 @@ def save_preview(path: PathLike, exemplar: np.ndarray, volume: np.ndarray, *,
     ----------
     path : str or os.PathLike
         Output ``.png`` file; parent directories are created, an existing file is replaced.
-    exemplar : numpy.ndarray
-        2D exemplar, in the same units as the volume.
+    exemplar : numpy.ndarray or dict
+        2D exemplar, in the same units as the volume; or one per view, ``{view: exemplar}``
+        (each then has its own panel).
     volume : numpy.ndarray
         ``(Z, Y, X)`` volume.
     depths : dict, optional
@@ -307,7 +311,7 @@ def save_preview(path: PathLike, exemplar: np.ndarray, volume: np.ndarray, *,
 
     Notes
     -----
-    Panels, left to right: the exemplar, ``volume[z]`` (rows y, columns x),
+    Panels, left to right: the exemplar (or each view's), ``volume[z]`` (rows y, columns x),
     ``volume[:, :, x].T`` (rows y, columns z) and ``volume[:, y, :]`` (rows z,
     columns x), all through one grey scale (the joint minimum black, maximum white).
     Each is enlarged by an integer nearest-neighbour factor to a long side of at least

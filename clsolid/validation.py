@@ -16,8 +16,9 @@ import numpy as np
 
 from .api import synthesize
 from .errors import InputError
+from .groundtruth import sections as cut_sections
 from .metrics import truth
-from .metrics import two_point_correlation_axes
+from .metrics import correlation_lengths, two_point_correlation_axes
 from .metrics._common import as_volume, check_int, jsonable
 from .phases import is_categorical
 from .report import _require_matplotlib
@@ -39,10 +40,15 @@ def segment(real: np.ndarray, classes: int) -> tuple[np.ndarray, list[float] | N
     return np.digitize(real, thresholds).astype(np.uint8), thresholds
 
 
+#: What :func:`validate` hands the generator: the central front section, or every view's.
+SECTIONS = ("front", "all")
+
+
 def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int, int] | None = None,
              seed: int = 0, device: Any = None, params: Any = None, classes: int = 2, tortuosity: bool = True,
-             progress: Callable[[str], None] | None = None, **options: Any) -> dict[str, Any]:
-    """Grow ``n`` volumes from a real volume's central front section and compare them with it.
+             sections: str = "front", progress: Callable[[str], None] | None = None, **options: Any
+             ) -> dict[str, Any]:
+    """Grow ``n`` volumes from a real volume's central section (or sections) and compare them with it.
 
     Parameters
     ----------
@@ -64,6 +70,10 @@ def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int
         the generated volumes too).
     tortuosity : bool
         Solve for tortuosity factors (phases over a quarter of the volume).
+    sections : {"front", "all"}
+        ``"front"``: the central front section, for every view; ``"all"``: the three central
+        sections, each its view's own exemplar (:func:`clsolid.groundtruth.sections`; an
+        anisotropic material's).
     progress : callable or None
         Called with a line of text as each step starts.
 
@@ -75,7 +85,9 @@ def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int
         property: real, band, generated mean, error, in_band, met; see
         :func:`clsolid.metrics.truth.compare_properties`), ``section`` (by phase, the
         section's own fraction and S2 along its rows and columns, y and x: what the
-        generator saw), ``volumes`` (each generated volume's own properties) and ``targets``.
+        generator saw), ``volumes`` (each generated volume's own properties),
+        ``correlation_length`` (along z, y and x: the real volume's, the generated volumes'
+        mean and its relative error; :func:`clsolid.metrics.correlation_lengths`) and ``targets``.
     """
     vol = as_volume(real, "real volume", min_side=4)
     n = check_int(n, "n", 1)
@@ -90,8 +102,12 @@ def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int
     labels, thresholds = segment(vol, classes)
     phases = np.unique(labels)
     max_lag = min(shape) // 2
+    if sections not in SECTIONS:
+        raise InputError(f"sections={sections!r} must be one of {', '.join(map(repr, SECTIONS))}")
     z = vol.shape[0] // 2
-    section = vol[z]
+    section = vol[z] if sections == "front" else dict(cut_sections(vol))
+    seen_as = f"front, z = {z}" if sections == "front" else (
+        f"front z = {z}, right x = {vol.shape[2] // 2}, top y = {vol.shape[1] // 2}")
 
     grown = []  # grown first: a refused option costs no measuring
     for i in range(n):
@@ -107,15 +123,21 @@ def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int
     say("the generated volumes' properties")
     samples = [truth.solid_properties(g, phases=phases, max_lag=max_lag, tortuosity=tortuosity) for g in grown]
     compared = truth.compare_properties(real_props, band, truth.mean_properties(samples))
+    # The correlation length along each axis (every phase at once): an anisotropic material's signature.
+    real_len = correlation_lengths(labels, phases)
+    grown_len = np.mean([correlation_lengths(g, phases) for g in grown], axis=0)
+    lengths = {"real": list(real_len), "generated": list(grown_len),
+               "error": [float(g / r - 1.0) if np.isfinite(r) and r > 0 else None for g, r in zip(grown_len, real_len)]}
     # What the generator saw: a section's fraction and S2 can lie far from the whole volume's.
     cut = labels[z]
     seen = {key: {"fraction": float(np.mean(cut == phase)),
                   "s2": list(two_point_correlation_axes(cut, phase, max_lag=max_lag))}
             for key, phase in zip(real_props, phases)}
     return jsonable({
-        "real": {"shape": vol.shape, "section": f"front, z = {z}", "thresholds": thresholds},
+        "real": {"shape": vol.shape, "section": seen_as, "thresholds": thresholds},
         "generated": {"method": method, "shape": shape, "seeds": list(range(seed, seed + n))},
         "band_count": count, "phases": compared, "section": seen, "volumes": samples,
+        "correlation_length": lengths,
         "targets": {**truth.TARGETS, "tortuosity_min_fraction": truth.TORTUOSITY_MIN_FRACTION},
     })
 
@@ -167,6 +189,11 @@ def format_validation(report: dict) -> str:
                   "  " + "".join(h.ljust(w) for h, w in zip(head, widths)) + "target"]
         for row in _rows(rows):
             lines.append("  " + "".join(c.ljust(w) for c, w in zip(row, widths)) + row[-1])
+    lengths = report.get("correlation_length")
+    if lengths:
+        lines += ["", "correlation length z / y / x: real " + " / ".join(_num(v) for v in lengths["real"])
+                  + ", generated " + " / ".join(_num(v) for v in lengths["generated"]) + " (error "
+                  + " / ".join("-" if e is None else f"{100 * e:+.0f} %" for e in lengths["error"]) + ")"]
     lines += ["", "error: fraction in points (0.01 = 1 point); S2, the largest gap in percent of the phase's "
               "fraction; surface area and tortuosity, relative (0.05 = 5 %). inf: no cluster spans the block"]
     return "\n".join(lines)

@@ -63,8 +63,29 @@ def test_the_plot_shows_s2_per_axis(tmp_path, report):
     assert (tmp_path / "s2.png").stat().st_size > 1000
 
 
+def test_the_three_sections_each_constrain_their_view(device):
+    """An anisotropic field, long along x, short along z: with its three sections the grown
+    volumes are long along x and short along z too, and the report gives the lengths."""
+    real = ground_truth("aniso2", 48, seed=0)
+    report = validate(real, n=1, shape=(24, 24, 24), device=device, sections="all", tortuosity=False,
+                      neighborhood=7, scales=2)
+    assert report["real"]["section"].startswith("front z = 24, right x = 24, top y = 24")
+    real_z, real_y, real_x = report["correlation_length"]["real"]
+    z, y, x = report["correlation_length"]["generated"]
+    assert real_z < real_y < real_x and z < y
+    assert x is None or y < x  # None: beyond half the block's side, longer still
+    assert "correlation length z / y / x" in format_validation(report)
+
+
+def test_the_correlation_length_error_is_relative(report):
+    lengths = report["correlation_length"]
+    for g, r, e in zip(lengths["generated"], lengths["real"], lengths["error"]):
+        assert e == pytest.approx(g / r - 1.0)
+
+
 @pytest.mark.parametrize("kw, match", [(dict(n=0), "n=0"), (dict(shape=(16, 16)), "three sides"),
-                                       (dict(shape=(16, 16, 64)), "does not fit"), (dict(classes=1), "classes=1")])
+                                       (dict(shape=(16, 16, 64)), "does not fit"), (dict(classes=1), "classes=1"),
+                                       (dict(sections="some"), "sections='some'")])
 def test_bad_arguments_are_refused_before_anything_grows(kw, match):
     with pytest.raises(InputError, match=match):
         validate(ground_truth("iso2", 32, seed=0), device="reference", **kw)

@@ -39,7 +39,7 @@ from clsolid.exemplar import nearest_level_index
 from clsolid.gallery import MAX_SIZE, SIZES, gallery_exemplar, gallery_info, gallery_names
 from clsolid.metrics._common import jsonable
 from clsolid.metrics.symmetry import AXIS_PAIRS
-from clsolid.core.views import VIEW_SETS
+from clsolid.core.views import view_set
 from clsolid.api import inserted_slices, slice_plan
 from clsolid.preview import render_preview
 from clsolid.core.slices import preview_depths
@@ -120,7 +120,7 @@ def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
     """Every number of the gallery for one synthesis result (phase fractions if ``categorical``)."""
     params = res.params
     vol, ex = level_indices(res)
-    constrained = VIEW_SETS[params["views"]]
+    constrained = view_set(params["views"])
     slices = inserted_slices(res.params, res.volume.shape)  # the +in (or anchor) slices of every view
     report = metrics.evaluate(ex, vol, views=VIEWS, constrained=constrained,  # +in copies would flatter
                               reference_repeats=REFERENCE_REPEATS, rng=0, exclude=slices)

@@ -31,6 +31,12 @@ def _cell(values: list, fmt: str, met: list | None) -> str:
     return " / ".join(f"{v:{fmt}}{mark}" if v is not None else f"inf{mark}" for v, mark in zip(values, marks))
 
 
+def _lengths(report: dict) -> str:
+    """The correlation length's relative errors along z, y and x, in percent; * past 10 %."""
+    errors = report.get("correlation_length", {}).get("error") or []
+    return " / ".join("-" if e is None else f"{100 * e:+.0f}{'*' if abs(e) > 0.1 else ''}" for e in errors) or "-"
+
+
 def summary_rows(name: str, method: str, report: dict) -> list[str]:
     """One Markdown row per phase: the errors, and * after each that misses its target."""
     rows = []
@@ -41,7 +47,8 @@ def summary_rows(name: str, method: str, report: dict) -> list[str]:
             f"{100 * r['fraction']['error']:.2f}{'' if r['fraction']['met'] else '*'} | "
             f"{100 * r['surface_area']['error']:.1f}{'' if r['surface_area']['met'] else '*'} | "
             f"{_cell(r['s2']['error'], '.1f', r['s2']['met'])} | "
-            f"{_cell([100 * e if e is not None else None for e in tau['error']], '.0f', tau['met']) if tau else '-'} |")
+            f"{_cell([100 * e if e is not None else None for e in tau['error']], '.0f', tau['met']) if tau else '-'} | "
+            f"{_lengths(report)} |")
     return rows
 
 
@@ -53,23 +60,26 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("-n", type=int, default=3, help="volumes per ground truth and method (default 3)")
     p.add_argument("--seed", type=int, default=0, help="the ground truths' seed (default 0)")
     p.add_argument("--device", default=None)
+    p.add_argument("--sections", default="front", choices=("front", "all"),
+                   help="the central front section for every view, or each view its own (default front)")
     p.add_argument("-o", "--outdir", required=True)
     args = p.parse_args(argv)
     out = Path(args.outdir)
     out.mkdir(parents=True, exist_ok=True)
     lines = ["| truth | method | phase | fraction | fraction error (points) | surface area error (%) | "
-             "S2 error z / y / x (% of fraction) | tortuosity error z / y / x (%) |", "|---" * 8 + "|"]
+             "S2 error z / y / x (% of fraction) | tortuosity error z / y / x (%) | "
+             "correlation length error z / y / x (%) |", "|---" * 9 + "|"]
     for name in args.names:
         side = args.side or SIDES[name]
         real = ground_truth(name, side, seed=args.seed)
         for method in args.methods:
             start = time.perf_counter()
-            report = validate(real, method=method, n=args.n, device=args.device,
+            report = validate(real, method=method, n=args.n, device=args.device, sections=args.sections,
                               progress=lambda line: print(f"  {line}", file=sys.stderr))
             report["real"]["ground_truth"] = {"name": name, "side": side, "seed": args.seed,
                                               "about": ground_truth_info(name).description}
             report["seconds"] = time.perf_counter() - start
-            (out / f"{name}-{method}.json").write_text(json.dumps(report, indent=1))
+            (out / f"{name}-{method}{'' if args.sections == 'front' else '-' + args.sections}.json").write_text(json.dumps(report, indent=1))
             print(f"{name} {side}^3, {method}, {report['seconds']:.0f} s")
             print(format_validation(report))
             lines += summary_rows(name, method, report)

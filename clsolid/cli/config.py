@@ -53,9 +53,11 @@ def sidecar_settings(path: Path) -> dict[str, Any]:
         recorded = cls.from_dict(params).to_dict()
     except (TypeError, InputError) as exc:
         raise InputError(f"--config {path}: its parameters are not valid ({exc})") from None
-    settings = {"exemplar": meta["exemplar"], "method": method, "shape": params["shape"], "seed": meta["seed"],
+    source = meta["exemplar"]  # a path or name, or one per view
+    given = source if isinstance(source, dict) else {"exemplar": source}
+    settings = {**given, "method": method, "shape": params["shape"], "seed": meta["seed"],
                 **{k: v for k, v in recorded.items() if k != "method"}}
-    if meta["exemplar"] in BUILTINS:
+    if any(isinstance(n, str) and n in BUILTINS for n in given.values()):
         settings["builtin_size"] = meta.get("builtin_size", 64)
     if meta.get("written") == "indices":
         settings["indices"] = True

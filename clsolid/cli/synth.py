@@ -37,6 +37,7 @@ from ..core.options import (
     refuse_unknown,
     validate,
 )
+from ..core.views import VIEW_ORDER
 from ..errors import InputError, OutputError
 from ..ml.backends import BackendOptions
 from ..ml.params import MLParams
@@ -49,6 +50,7 @@ from .outputs import check_writable
 #: The groups of ``clsolid synth --help``, in order: key -> title.
 GROUPS = {
     "essentials": "essentials",
+    "views": "an exemplar per view (ml), instead of EXEMPLAR",
     "method": "every method",
     "ml": "ml: maximum likelihood (Urs et al., TIP 2014)",
     "search": "wl, kopf, chen-wang: neighbourhood search (Urs thesis, ch. 3)",
@@ -101,7 +103,8 @@ def _path(what: str) -> Anything:
     return Anything(what, Path)
 
 
-_E, _O, _R = "essentials", "output", "run"
+_E, _O, _R, _V = "essentials", "output", "run", "views"
+_ANY_EXEMPLAR = Anything("a file or a built-in name")
 
 
 @documented
@@ -127,6 +130,12 @@ class SynthCommand:
     config: Path | None = option(None, "settings from a TOML file or a run's sidecar JSON (flags given override "
                                  "them)", group=_E, check=_path("a .toml or .json file"), metavar="FILE", none="none")
     quiet: bool = option(False, "no progress on stderr", group=_E, check=Flag(), short="-q")
+    front: str | None = option(None, "the front view's exemplar: the (y, x) plane, seen along z", group=_V,
+                               check=_ANY_EXEMPLAR, methods=_ML, metavar="IMAGE", none="none")
+    right: str | None = option(None, "the right view's exemplar: the (y, z) plane, seen along x", group=_V,
+                               check=_ANY_EXEMPLAR, methods=_ML, metavar="IMAGE", none="none")
+    top: str | None = option(None, "the top view's exemplar: the (z, x) plane, seen along y", group=_V,
+                             check=_ANY_EXEMPLAR, methods=_ML, metavar="IMAGE", none="none")
     indices: bool = option(False, "write level indices (0..levels-1) instead of the exemplar's values", group=_O,
                            check=Flag(), methods=_ML)
     voxel_size: list[float] | None = option(None, "voxel size for the TIFF: one value, or Z Y X", group=_O,
@@ -161,7 +170,7 @@ class SynthCommand:
 SOURCES: tuple[tuple[str, type], ...] = (("command", SynthCommand), ("ml", MLParams),
                                          ("wl, kopf, chen-wang", SearchParams), ("backend", BackendOptions))
 #: What a checkpoint fixes: given with --resume, these are an error, not ignored.
-_RESUME_FIXED = ("exemplar", "shape", "method", "preset", "seed", "builtin_size", "track", "config", "checkpoint")
+_RESUME_FIXED = ("exemplar", *VIEW_ORDER, "shape", "method", "preset", "seed", "builtin_size", "track", "config", "checkpoint")
 
 
 class _HelpAll(argparse.Action):
@@ -378,7 +387,7 @@ def run_synth(given: dict[str, Any]) -> int:
     """``clsolid synth`` with the flags *given*; returns the exit status."""
     from ..api import resume, slice_plan, synthesize
     from ..core.slices import preview_depths
-    from ..exemplar import load_exemplar
+    from ..exemplar import load_exemplars
     from ..preview import save_preview, save_site_map
     from ..volumeio import check_calibration, save_volume
 
@@ -387,7 +396,8 @@ def run_synth(given: dict[str, Any]) -> int:
     voxel_size, unit, voxel_from = _voxel_size(cmd)
     check_calibration(voxel_size, unit or "um", Path(cmd.output))  # now, not after the run
     check_outputs(cmd, backend)
-    image = None if cmd.resume is not None else load_exemplar(cmd.exemplar, builtin_size=cmd.builtin_size)
+    image = None if cmd.resume is not None else load_exemplars(_exemplar_source(cmd, settings.origin),
+                                                               builtin_size=cmd.builtin_size)
     hooks = [] if cmd.quiet else [render_progress]
     records: list = []
     if cmd.track is not None:
@@ -425,14 +435,27 @@ def run_synth(given: dict[str, Any]) -> int:
     return 0
 
 
+def _exemplar_source(cmd: Any, origin: dict[str, str]) -> str | dict[str, str]:
+    """EXEMPLAR, or the views' own exemplars (``--front``, ``--right``, ``--top``): never both."""
+    views = {v: getattr(cmd, v) for v in VIEW_ORDER if getattr(cmd, v) is not None}
+    if not views:
+        return cmd.exemplar
+    if "exemplar" in origin:
+        raise InputError(f"EXEMPLAR {cmd.exemplar!r} and {', '.join('--' + v for v in views)} both given: give one "
+                         "exemplar for every view, or an exemplar per view (two or three of --front, --right, --top)")
+    return views
+
+
 def _write_the_rest(cmd, settings, result, written, voxel_size, unit, voxel_from, records, save_preview,
                     save_site_map, slice_plan, preview_depths) -> list[str]:
     """The sidecar, the preview and the maps; what was written, in words."""
     from ..exemplar import BUILTINS
 
     sidecar = _sidecar(written)
-    meta = {"volume": str(written), "exemplar": str(cmd.exemplar) if cmd.resume is None else None,
-            "builtin_size": cmd.builtin_size if cmd.resume is None and cmd.exemplar in BUILTINS else None,
+    source = _exemplar_source(cmd, settings.origin) if cmd.resume is None else None
+    named = list(source.values()) if isinstance(source, dict) else [source]
+    meta = {"volume": str(written), "exemplar": source if source is None or isinstance(source, dict) else str(source),
+            "builtin_size": cmd.builtin_size if source is not None and any(n in BUILTINS for n in named) else None,
             "resumed_from": None if cmd.resume is None else str(cmd.resume),
             "written": "indices" if cmd.indices else "values",
             "values_exact": result.values_exact, "level_values": result.level_values.tolist(),
@@ -457,7 +480,7 @@ def _write_the_rest(cmd, settings, result, written, voxel_size, unit, voxel_from
         np.save(cmd.source_map, result.source)
         others.append(str(cmd.source_map))
     if cmd.track is not None:
-        Path(cmd.track).write_text(json.dumps({"exemplar": str(cmd.exemplar), "seed": result.seed,
+        Path(cmd.track).write_text(json.dumps({"exemplar": meta["exemplar"], "seed": result.seed,
                                                "records": records}, indent=2))
         others.append(str(cmd.track))
     return others
@@ -502,10 +525,12 @@ def _tracker(levels: int, records: list):
         vol = info.volume()
         ind = {}
         for view in ("front", "right"):
+            ex = info.exemplar.get(view) if isinstance(info.exemplar, dict) else info.exemplar  # per view: its own
+            if ex is None:
+                continue
             sl = metrics.view_slices(vol, view, max_slices=8)
-            ind[f"autocorrelation_{view}"] = float(metrics.autocorrelation_distance(info.exemplar, sl))
-            ind[f"histogram_kl_{view}"] = float(metrics.histogram_distance(
-                info.exemplar, sl, bins=levels, value_range=(0, levels)))
+            ind[f"autocorrelation_{view}"] = float(metrics.autocorrelation_distance(ex, sl))
+            ind[f"histogram_kl_{view}"] = float(metrics.histogram_distance(ex, sl, bins=levels, value_range=(0, levels)))
         records.append({"scale": info.scale, "sweep": info.sweep, "temperature": info.temperature,
                         "elapsed": info.elapsed, "indicators": ind})
 

@@ -18,7 +18,8 @@ from .outputs import check_writable
 def add_validate(sub: Any) -> argparse.ArgumentParser:
     """The ``validate`` subcommand's parser on the subparsers *sub*."""
     p = sub.add_parser("validate", help="compare generated volumes with a real 3D volume, in 3D",
-                       description="Hand a generator the real volume's central front section, grow volumes, and "
+                       description="Hand a generator the real volume's central front section (or its three "
+                                   "sections), grow volumes, and "
                                    "compare their 3D properties (per phase: fraction, surface area, S2 per axis, "
                                    "connected fraction, tortuosity factor) with the real volume's and with its "
                                    "own spread over sub-volumes of the same size.")
@@ -29,6 +30,9 @@ def add_validate(sub: Any) -> argparse.ArgumentParser:
                    help="their shape (default: half the real volume's on each axis)")
     p.add_argument("--seed", type=int, default=0, help="the first volume's seed (default 0)")
     p.add_argument("--device", default=None, help="OpenCL device, as for synth")
+    p.add_argument("--sections", default="front", choices=("front", "all"),
+                   help="hand the generator the central front section (default), or all three, each its view's "
+                        "own exemplar (anisotropic materials; ml)")
     p.add_argument("--classes", type=int, default=2, help="phases to cut a grey real volume into (default 2)")
     p.add_argument("--config", metavar="FILE.toml", default=None, help="the method's options from a TOML file")
     p.add_argument("--no-tortuosity", action="store_true", help="skip the tortuosity factors (the slowest part)")
@@ -65,7 +69,7 @@ def run_validate(args: argparse.Namespace) -> int:
     say = None if args.quiet else (lambda line: print(line, file=sys.stderr))
     report = validate(real, method=method, n=args.n, shape=tuple(args.shape) if args.shape else None,
                       seed=args.seed, device=args.device, classes=args.classes, tortuosity=not args.no_tortuosity,
-                      progress=say, **options)
+                      sections=args.sections, progress=say, **options)
     report["real"]["file"] = str(args.real)
     print(format_validation(report))
     if args.output:

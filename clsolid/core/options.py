@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Iterator
 
 from ..errors import InputError
+from .views import view_set, views_value
 
 #: The key under which a field's :class:`Option` sits in ``dataclasses.field(metadata=...)``.
 METADATA_KEY = "clsolid"
@@ -487,19 +488,19 @@ def _levels_word(text: str) -> int | None:
 
 @dataclass(frozen=True)
 class Views(Check):
-    """2 or 3 constrained views."""
+    """The constrained views: 2, 3, or two or three view names (:func:`clsolid.core.views.view_set`)."""
 
-    parse = int
+    parse = staticmethod(lambda text: int(text) if text.strip().isdigit() else text)
 
     def describe(self) -> str:
-        return "2 (front + right) or 3 (front + right + top)"
+        return ("2 (front + right), 3 (front + right + top) or two view names such as 'front+top' "
+                "(views: front, right, top)")
 
     def valid(self, value: Any) -> bool:
-        return isinstance(value, numbers.Integral) and not isinstance(value, bool) and value in (2, 3)
+        return view_set(value) is not None
 
-    @property
-    def choices(self) -> tuple:
-        return (2, 3)
+    def normalise(self, value: Any) -> int | str:
+        return views_value(view_set(value))
 
 
 @dataclass(frozen=True)
@@ -512,7 +513,8 @@ class Levels(Int):
 def views_option() -> Any:
     """``views``: the constrained views, declared once for every method."""
     return option(3, "constrained views: 3 = front, right and top (every section alike), 2 = front and right "
-                  "only, sharing y (layered or directional materials)", group="essentials",
+                  "only, sharing y (layered or directional materials), or a pair by name (front+top)",
+                  group="essentials", metavar="N|PAIR",
                   check=Views())
 
 

@@ -33,7 +33,7 @@ def slice_depths(size: int, count: int, step: int, offset: float = 0.0) -> np.nd
 
 def _view_offset(plan: Any, view: str) -> float:
     """Where a view's ``+in`` slices sit between the front view's: staggered, view i of n at i/n."""
-    return plan.view_names.index(view) / plan.views if plan.slice_layout == "staggered" else 0.0
+    return plan.view_names.index(view) / len(plan.view_names) if plan.slice_layout == "staggered" else 0.0
 
 
 #: Voxels between a view's ``+in`` slices when a plan leaves the spacing to its exemplar
@@ -112,9 +112,10 @@ def seam_free(n: int, shift: int, size: int, band: int) -> np.ndarray:
     return ok
 
 
-def insert_slices(vol: np.ndarray, labels_img: np.ndarray, plan: Any, level: int, seed: int,
+def insert_slices(vol: np.ndarray, labels_img: np.ndarray | dict[str, np.ndarray], plan: Any, level: int, seed: int,
                   full_shape: tuple[int, int, int], mask: np.ndarray | None = None) -> np.ndarray:
-    """``+in``: tile the exemplar onto the ``+in`` slices of each constrained view.
+    """``+in``: tile the exemplar (each view's own, given a dict by view) onto the ``+in`` slices
+    of each constrained view.
 
     Called at every scale with that scale's exemplar: the depths (:func:`inserted_depths`
     of the full-resolution *full_shape*), the tile shifts and the pieces are the
@@ -139,26 +140,27 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, plan: Any, level: int
     mask = np.zeros(vol.shape, bool) if mask is None else mask
     step = 2 ** (plan.scales - 1 - level)
     shift_rng = np.random.default_rng([seed, 0x1A5E])  # the same draws at every scale
-    ex_slots = np.array([-(-n // step) for n in labels_img.shape])
     piece = int(plan.insert_piece)
     band = max(1, int(plan.seam_gap) >> level) if plan.seam_gap else 0
 
-    def tiled(rows: int, cols: int, full_rows: int, full_cols: int) -> tuple[np.ndarray, np.ndarray]:
-        """A slice's exemplar pixels, and which of them to write."""
+    def tiled(image: np.ndarray, rows: int, cols: int, full_rows: int, full_cols: int
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """A slice's pixels of *image*, and which of them to write."""
+        ex_slots = np.array([-(-n // step) for n in image.shape])
         if piece:  # one seeded shift per piece, drawn for the full-resolution grid of pieces
             grid = shift_rng.integers(0, ex_slots, size=(-(-full_rows // piece), -(-full_cols // piece), 2))
             cell = piece >> level
             r, c = np.arange(rows)[:, None], np.arange(cols)[None, :]
             shift = grid[r // cell, c // cell] * step
-            img = labels_img[(r + shift[..., 0]) % labels_img.shape[0], (c + shift[..., 1]) % labels_img.shape[1]]
+            img = image[(r + shift[..., 0]) % image.shape[0], (c + shift[..., 1]) % image.shape[1]]
             return img, np.ones(img.shape, bool)
         shift = [0, 0]
         if plan.slice_layout == "staggered":
             shift = [int(shift_rng.integers(0, n)) * step for n in ex_slots]
-        reps = (-(-(rows + shift[0]) // labels_img.shape[0]), -(-(cols + shift[1]) // labels_img.shape[1]))
-        img = np.tile(labels_img, reps)[shift[0]: shift[0] + rows, shift[1]: shift[1] + cols]
-        written = (seam_free(rows, shift[0], labels_img.shape[0], band)[:, None]
-                   & seam_free(cols, shift[1], labels_img.shape[1], band)[None, :])
+        reps = (-(-(rows + shift[0]) // image.shape[0]), -(-(cols + shift[1]) // image.shape[1]))
+        img = np.tile(image, reps)[shift[0]: shift[0] + rows, shift[1]: shift[1] + cols]
+        written = (seam_free(rows, shift[0], image.shape[0], band)[:, None]
+                   & seam_free(cols, shift[1], image.shape[1], band)[None, :])
         return img, written
 
     Z, Y, X = vol.shape
@@ -167,13 +169,14 @@ def insert_slices(vol: np.ndarray, labels_img: np.ndarray, plan: Any, level: int
     share = plan.slice_layout == "staggered"
     for view, full_depths in inserted_depths(full_shape, plan).items():
         depths = full_depths // 2**level
+        image = labels_img[view] if isinstance(labels_img, dict) else labels_img
         for k, d in enumerate(depths):
             if view == "front":
-                plane, (img, written) = np.s_[d, :, :], tiled(Y, X, FY, FX)
+                plane, (img, written) = np.s_[d, :, :], tiled(image, Y, X, FY, FX)
             elif view == "right":
-                plane, (img, written) = np.s_[:, :, d], (a.T for a in tiled(Y, Z, FY, FZ))
+                plane, (img, written) = np.s_[:, :, d], (a.T for a in tiled(image, Y, Z, FY, FZ))
             else:
-                plane, (img, written) = np.s_[:, d, :], tiled(Z, X, FZ, FX)
+                plane, (img, written) = np.s_[:, d, :], tiled(image, Z, X, FZ, FX)
             earlier = np.zeros(written.shape, bool)
             for axis, theirs in placed:  # crossings with an earlier view's slices: it keeps those of even i + k
                 at = axis if axis < DEPTH_AXIS[view] else axis - 1

@@ -22,7 +22,8 @@ class SweepInfo:
     ends the scale (0 when a fixed number of ``sweeps`` does). ``eta`` is an estimate in seconds of
     the time left for the whole synthesis. ``volume()`` returns a copy of the block
     at the current scale, and ``exemplar`` is the quantised exemplar decimated to that
-    scale, so the two can be compared during the run.
+    scale (with an exemplar per view, a dict of them by view), so the two can be compared
+    during the run.
     """
 
     scale: int
@@ -36,7 +37,7 @@ class SweepInfo:
     visited: int
     elapsed: float
     eta: float
-    exemplar: np.ndarray = field(repr=False)
+    exemplar: np.ndarray | dict[str, np.ndarray] = field(repr=False)
     volume: Callable[[], np.ndarray] = field(repr=False)
 
 
@@ -56,11 +57,12 @@ class SynthesisResult:
         The same volume as level indices in ``[0, level_values.size)`` (uint8, or uint16
         above 256 levels): what the engine works on. None for the search methods, whose
         voxels are exemplar values or their means, not levels.
-    exemplar : ndarray
+    exemplar : ndarray or dict
         The exemplar as the engine saw it, in its own units (each pixel replaced by its
-        level's value; identical to the input when ``values_exact``).
-    exemplar_labels : ndarray
-        The same exemplar as level indices.
+        level's value; identical to the input when ``values_exact``); with an exemplar
+        per view, a dict of them by view.
+    exemplar_labels : ndarray or dict
+        The same exemplar (or exemplars) as level indices.
     level_values : ndarray
         Value of each level index: ``level_values[labels] == volume``.
     values_exact : bool

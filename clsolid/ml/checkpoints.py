@@ -11,6 +11,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..core.checkpoint import CheckpointError, read_checkpoint, write_checkpoint
+from ..core.views import VIEW_ORDER
 from .driver import RunState
 from .params import MLParams
 
@@ -23,7 +24,7 @@ class Checkpointer:
     loaded goes in too, so a resumed run needs nothing else."""
 
     def __init__(self, folder: str | os.PathLike, every_s: float, meta: dict[str, Any],
-                 exemplar: np.ndarray) -> None:
+                 exemplar: np.ndarray | dict[str, np.ndarray]) -> None:
         self.folder, self.every_s, self.meta, self.exemplar = folder, every_s, meta, exemplar
         self.last = -np.inf
 
@@ -32,7 +33,7 @@ class Checkpointer:
 
     def save(self, state: RunState) -> None:
         write_checkpoint(self.folder, {**self.meta, "timings": state.timings},
-                         {**state.arrays(), "exemplar": self.exemplar})
+                         {**state.arrays(), **exemplar_arrays(self.exemplar)})
         self.last = time.monotonic()
 
 
@@ -44,7 +45,7 @@ def check_every(value: Any) -> float:
 
 
 def load_run(folder: str | os.PathLike, empty: Callable[[tuple, np.dtype], np.ndarray] = np.empty
-             ) -> tuple[dict[str, Any], MLParams, np.ndarray, RunState]:
+             ) -> tuple[dict[str, Any], MLParams, np.ndarray | dict[str, np.ndarray], RunState]:
     """The description, parameters, exemplar and state of a likelihood run's checkpoint, its
     arrays made by *empty* (:func:`clsolid.core.checkpoint.read_checkpoint`).
 
@@ -56,7 +57,7 @@ def load_run(folder: str | os.PathLike, empty: Callable[[tuple, np.dtype], np.nd
     meta, arrays = read_checkpoint(folder, empty)
     if meta.get("method") != "ml":
         raise CheckpointError(f"{folder} is a checkpoint of method {meta.get('method')!r}; only 'ml' runs resume")
-    missing = {"exemplar", "volume", "temperature", "inherited", "bias", "scalars", "position"} - set(arrays)
+    missing = {"volume", "temperature", "inherited", "bias", "scalars", "position"} - set(arrays)
     if missing or not {"params", "shape", "seed", "timings"} <= set(meta):
         raise CheckpointError(f"{folder} lacks {sorted(missing) or 'part of its description'}: the checkpoint "
                               "is corrupt")
@@ -64,4 +65,16 @@ def load_run(folder: str | os.PathLike, empty: Callable[[tuple, np.dtype], np.nd
     if params.likelihood == "pruned" and "sources" not in arrays:
         raise CheckpointError(f"{folder} is of a likelihood='pruned' run but holds no sources: the checkpoint "
                               "is corrupt")
-    return meta, params, arrays["exemplar"], RunState.from_arrays(arrays, meta["timings"])
+    exemplar = arrays.get("exemplar")
+    if exemplar is None:  # one per view
+        exemplar = {v: arrays[f"exemplar_{v}"] for v in VIEW_ORDER if f"exemplar_{v}" in arrays} or None
+    if exemplar is None:
+        raise CheckpointError(f"{folder}: the checkpoint holds no exemplar: it is corrupt")
+    return meta, params, exemplar, RunState.from_arrays(arrays, meta["timings"])
+
+
+def exemplar_arrays(exemplar: np.ndarray | dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The arrays a checkpoint keeps its exemplar in: ``exemplar``, or ``exemplar_<view>`` for each view's."""
+    if isinstance(exemplar, dict):
+        return {f"exemplar_{v}": im for v, im in exemplar.items()}
+    return {"exemplar": exemplar}

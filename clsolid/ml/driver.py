@@ -84,7 +84,7 @@ class Balance:
                  scratch: Scratch | None = None) -> None:
         self.model, self.beta = model, beta
         self.scratch = Scratch() if scratch is None else scratch
-        self.pi = label_fractions(model.exemplar, model.labels)
+        self.pi = label_fractions(model.pixels, model.labels)  # with an exemplar per view, their pixels pooled
         self.stride = score_stride(model.shape)
         self.bias = bias  # zeros at a scale's start (a coarser scale's labels mean other grey levels)
         self.dtype = np.min_scalar_type(max(model.labels.size - 1, 0))
@@ -166,7 +166,7 @@ class _Clock:
 
     def _unit(self, model: ScaleModel) -> int:
         """Terms per voxel visit: every site's window, or, pruned, at most the candidates and the sample."""
-        sites = model.n_sites
+        sites = model.n_sites // (model.offsets.shape[0] if model.per_view else 1)  # a view's own
         if self.params.likelihood == "pruned":
             sites = min(sites, 9 * self.params.n_similar + self.params.n_sample)
         return sites * model.patches.shape[0]
@@ -267,7 +267,7 @@ class RunState:
 
 
 def run_ml(
-    labels_img: np.ndarray,
+    labels_img: np.ndarray | dict[str, np.ndarray],
     shape: tuple[int, int, int],
     params: MLParams,
     seed: int,
@@ -276,7 +276,8 @@ def run_ml(
     checkpoint: Any = None,
     resume: RunState | None = None,
 ) -> tuple[np.ndarray, dict, list[float]]:
-    """Run the multi-scale relaxation on quantised exemplar labels with a back end.
+    """Run the multi-scale relaxation on quantised exemplar labels (one image, or one per view)
+    with a back end.
 
     Each sweep draws its random numbers from Philox keyed by *seed*, counter (x, y, z,
     :func:`clsolid.core.philox.relax_tag` (level, sweep)). Under ``relaxation="annealing"``
@@ -299,13 +300,14 @@ def run_ml(
 
     Returns the full-resolution volume, the timings and the per-scale bandwidths.
     """
-    check_exemplar_fits(labels_img.shape, params)
+    check_exemplar_fits({v: im.shape for v, im in labels_img.items()} if isinstance(labels_img, dict)
+                        else labels_img.shape, params)
     scratch = backend.scratch or Scratch()  # a tiled back end's, where it keeps the state
     levels = list(range(params.scales - 1, -1, -1))
     models = [build_scale(labels_img, shape, params, lv) for lv in levels]
     backend.prepare(models, params)  # refuses, before allocating, what the device cannot hold
     clock = _Clock(models, params)
-    base = backend.init_volume(shape, seed, models[0].exemplar)
+    base = backend.init_volume(shape, seed, models[0].pixels)
     resynth = params.inherited == "resynthesize"
     annealing = params.relaxation == "annealing"
     pruned = params.likelihood == "pruned"

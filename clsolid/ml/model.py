@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..exemplar import pooled
 from ..phases import phase_costs
 from .params import VIEW_AXES, MLParams
 from ..core.schedule import colour_set, colour_sets, set_count
@@ -172,8 +173,10 @@ def direction_weights(offsets: np.ndarray, shared: float) -> np.ndarray:
         for axis in axes:
             w *= 1.0 - (1.0 - shared) * o[:, axis] ** 2 / length2
         weights.append(w)
-    if not all(np.allclose(w, weights[0]) for w in weights[1:]):  # VIEW_AXES keeps them alike
-        raise AssertionError("the views' windows are weighted differently; the kernel has one table")
+    if not all(np.allclose(w, weights[0]) for w in weights[1:]):  # VIEW_AXES keeps front, right, top alike
+        raise InputError("shared_weight < 1 weighs the views' windows differently for this pair of views (their "
+                         "shared axis runs along rows in one and columns in the other), and the kernels hold "
+                         "one weight table: leave shared_weight at 1 for these views")
     return weights[0]
 
 
@@ -254,7 +257,7 @@ class ScaleModel:
 
     level: int
     shape: tuple[int, int, int]
-    exemplar: np.ndarray
+    exemplar: np.ndarray | dict[str, np.ndarray]  # the scale's exemplar, or each view's (per_view)
     half: int
     offsets: np.ndarray  # (views, R, 3)
     union_offsets: np.ndarray  # (U, 3): neighbours in any constrained view
@@ -267,6 +270,23 @@ class ScaleModel:
     costs: np.ndarray | None = None  # distance="weighted": each label's half-cost (phase_costs)
     term_weight: np.ndarray | None = None  # (R,) each term's weight: the fall-off's, the parent_weight
     parent_rows: int = 0  # the last rows of offsets and patches: the parent square's (parent_offsets), or none
+    view_sites: tuple[int, ...] | None = None  # per-view exemplars: view v's sites are [v_sites[v], v_sites[v+1])
+
+    @property
+    def per_view(self) -> bool:
+        """Whether each view has its own exemplar (then :attr:`exemplar` is a dict by view)."""
+        return self.view_sites is not None
+
+    def sites_of(self, view: int) -> slice:
+        """The sites (columns of :attr:`patches`, entries of :attr:`centres`) *view* sums over."""
+        if self.view_sites is None:
+            return slice(0, self.n_sites)
+        return slice(self.view_sites[view], self.view_sites[view + 1])
+
+    @property
+    def pixels(self) -> np.ndarray:
+        """Every exemplar pixel of this scale, the views' pooled (:func:`clsolid.exemplar.pooled`)."""
+        return pooled(self.exemplar)
 
     def coded(self, values: np.ndarray) -> np.ndarray:
         """Label *values* as the kernels compare them: themselves, or with :attr:`costs` their
@@ -311,8 +331,15 @@ class ScaleModel:
         return colour_set(self.shape, self.n_sets, c, active, box)
 
 
-def check_exemplar_fits(exemplar_shape: tuple[int, int], params: MLParams) -> None:
-    """Refuse an exemplar too small for the window at the coarsest scale."""
+def check_exemplar_fits(exemplar_shape: tuple[int, int] | dict[str, tuple[int, int]], params: MLParams) -> None:
+    """Refuse an exemplar (each view's, given a dict of shapes) too small for the window at the coarsest scale."""
+    if isinstance(exemplar_shape, dict):
+        for view, one in exemplar_shape.items():
+            try:
+                check_exemplar_fits(one, params)
+            except InputError as err:
+                raise InputError(f"the {view} {err}") from None
+        return
     coarse = scale_shape((1,) + tuple(exemplar_shape), params.scales - 1)[1:]
     if min(coarse) < params.neighborhood:
         raise InputError(
@@ -323,58 +350,80 @@ def check_exemplar_fits(exemplar_shape: tuple[int, int], params: MLParams) -> No
         )
 
 
+def view_exemplars(labels_img: np.ndarray | dict[str, np.ndarray], views: tuple[str, ...]) -> list[np.ndarray]:
+    """The exemplar each of *views* is constrained by: the one exemplar, or each view's own."""
+    if not isinstance(labels_img, dict):
+        return [labels_img] * len(views)
+    if set(labels_img) != set(views):
+        raise InputError(f"exemplars are given for views {sorted(labels_img)} but the run constrains {list(views)}")
+    return [labels_img[v] for v in views]
+
+
 def build_scale(
-    labels_img: np.ndarray, shape: tuple[int, int, int], params: MLParams, level: int
+    labels_img: np.ndarray | dict[str, np.ndarray], shape: tuple[int, int, int], params: MLParams, level: int
 ) -> ScaleModel:
-    """Tables of scale *level* from the full-resolution exemplar labels."""
+    """Tables of scale *level* from the full-resolution exemplar labels (one image, or one per
+    view: their tables are then stacked view after view, :attr:`ScaleModel.view_sites`)."""
     half = params.neighborhood // 2
     mismatch = params.distance in ("mismatch", "weighted")  # "auto" unresolved (params.for_exemplar): squared
+    per_view = isinstance(labels_img, dict)
+    images = view_exemplars(labels_img, params.view_names)
+    pool = pooled(labels_img)
     costs = None
     if params.distance == "weighted":
-        values = np.unique(labels_img)
+        values = np.unique(pool)
         if not np.array_equal(values, np.arange(values.size)):
             raise InputError("distance='weighted' needs the labels 0..L-1 (as synthesize makes them)")
-        costs = phase_costs(labels_img)
-    ex = scale_exemplar(labels_img, level, params.pyramid, phases=mismatch)
-    centres, patches = exemplar_tables(ex, half)
+        costs = phase_costs(pool)
+    own = images[:1] if not per_view else images  # each distinct exemplar once
+    scaled = [scale_exemplar(im, level, params.pyramid, phases=mismatch) for im in own]
+    tables = [exemplar_tables(ex, half) for ex in scaled]
+    coarse = [None] * len(own)
+    if params.parent_weight and level < params.scales - 1:  # the coarsest scale has no parent
+        coarse = [scale_exemplar(im, level + 1, params.pyramid, phases=mismatch) for im in own]
+    # a small coarser exemplar's result is not to be trusted (params.PARENT_MIN_SIDE)
+    with_parents = all(c is not None and min(c.shape) >= params.parent_min_side for c in coarse)
+    if with_parents:
+        tables = [(c, np.concatenate([p, parent_tables(cx, ex.shape, half)]))
+                  for (c, p), cx, ex in zip(tables, coarse, scaled)]
+    counts = [c.size for c, _ in tables]
+    centres = np.concatenate([c for c, _ in tables])
+    patches = np.concatenate([p for _, p in tables], axis=1)
     if params.bandwidth is not None:
         h = params.bandwidth[level]
     else:
-        sigma = phase_sigma(ex, costs) if mismatch else float(ex.std())
+        ex_pool = pooled(dict(enumerate(scaled))) if per_view else scaled[0]
+        sigma = phase_sigma(ex_pool, costs) if mismatch else float(ex_pool.std())
         # A constant exemplar has sigma = 0; any bandwidth gives the same (constant) result.
         factor = params.bandwidth_factor[level]
-        h = silverman(sigma, centres.size, params.neighborhood**2) * factor if sigma > 0 else 1.0
+        # per view: each view's sum runs over its own sites, so n is their mean count
+        h = silverman(sigma, int(round(np.mean(counts))), params.neighborhood**2) * factor if sigma > 0 else 1.0
     offsets = np.stack([view_offsets(v, half) for v in params.view_names])
     union = np.unique(offsets.reshape(-1, 3), axis=0)  # the temperatures' neighbours: no parent terms
     sshape = scale_shape(shape, level)
     weight = term_weights(offsets, params.falloff or 0.0,  # every view's rows pair alike
                           1.0 if params.shared_weight is None else float(params.shared_weight), params.shared_profile)
     parents = 0
-    coarse = None
-    if params.parent_weight and level < params.scales - 1:  # the coarsest scale has no parent
-        coarse = scale_exemplar(labels_img, level + 1, params.pyramid, phases=mismatch)
-    # a small coarser exemplar's result is not to be trusted (params.PARENT_MIN_SIDE)
-    if coarse is not None and min(coarse.shape) >= params.parent_min_side:
-        square = parent_tables(coarse, ex.shape, half)
-        parents = square.shape[0]
+    if with_parents:
+        parents = 9
         weight = np.concatenate([np.ones(offsets.shape[1]) if weight is None else weight,
                                  np.full(parents, float(params.parent_weight))])
-        patches = np.concatenate([patches, square])
         offsets = np.concatenate([offsets, np.stack([parent_offsets(v) for v in params.view_names])], axis=1)
     return ScaleModel(
         level=level,
         shape=sshape,
-        exemplar=ex,
+        exemplar=dict(zip(params.view_names, scaled)) if per_view else scaled[0],
         half=half,
         offsets=offsets,
         union_offsets=union,
         centres=centres,
         patches=patches,
         bandwidth=h,
-        labels=np.unique(labels_img).astype(np.float64),
+        labels=np.unique(pool).astype(np.float64),
         n_sets=set_count(sshape, half),
         mismatch=mismatch,
         costs=costs,
         term_weight=weight,
         parent_rows=parents,
+        view_sites=tuple(int(n) for n in np.cumsum([0] + counts)) if per_view else None,
     )

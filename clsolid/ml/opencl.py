@@ -41,30 +41,52 @@ def scalar_dtype() -> np.dtype:
     return np.dtype(fields)
 
 
-def group_tables(model: ScaleModel, vw: int):
-    """Exemplar sites sorted by centre value and padded per group to whole vectors.
-
-    Returns ``patches`` ``(chunks, R, vw)`` float32, ``chunk_group`` and ``chunk_valid``
-    (int32 per chunk), the group values (float32, ascending) and ``chunk_site``
-    ``(chunks * vw,)`` int32, the site in each lane (0 in padding lanes).
-    """
-    values, group_of_site = np.unique(model.centres, return_inverse=True)
+def _group_table(centres: np.ndarray, patches: np.ndarray, values: np.ndarray, vw: int):
+    """One exemplar's sites (*centres* ``(n,)``, coded *patches* ``(R, n)``) sorted by centre value,
+    each a group of *values*, and padded per group to whole vectors (see :func:`group_tables`)."""
+    group_of_site = np.searchsorted(values, centres)
     counts = np.bincount(group_of_site, minlength=values.size)
     order = np.argsort(group_of_site, kind="stable")
     chunks_per_group = -(-counts // vw)
     chunk_group = np.repeat(np.arange(values.size), chunks_per_group).astype(np.int32)
     first_chunk = np.concatenate([[0], np.cumsum(chunks_per_group)[:-1]])
     group_start = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    rank = np.arange(model.n_sites) - group_start[group_of_site[order]]  # position within group
+    rank = np.arange(centres.size) - group_start[group_of_site[order]]  # position within group
     slot = first_chunk[group_of_site[order]] * vw + rank  # padded position of each sorted site
     n_chunks = chunk_group.size
-    padded = np.zeros((model.patches.shape[0], n_chunks * vw), np.float32)
-    padded[:, slot] = model.coded(model.patches)[:, order]
-    patches = padded.reshape(-1, n_chunks, vw).transpose(1, 0, 2).copy()
+    padded = np.zeros((patches.shape[0], n_chunks * vw), np.float32)
+    padded[:, slot] = patches[:, order]
     chunk_valid = np.minimum(vw, counts[chunk_group] - (np.arange(n_chunks) - first_chunk[chunk_group]) * vw)
     chunk_site = np.zeros(n_chunks * vw, np.int32)
     chunk_site[slot] = order
-    return patches, chunk_group, chunk_valid.astype(np.int32), values.astype(np.float32), chunk_site
+    return padded.reshape(-1, n_chunks, vw).transpose(1, 0, 2), chunk_group, chunk_valid.astype(np.int32), chunk_site
+
+
+def group_tables(model: ScaleModel, vw: int):
+    """Exemplar sites sorted by centre value and padded per group to whole vectors; with an
+    exemplar per view, each view's in turn, every view's groups one set of values.
+
+    Returns ``patches`` ``(chunks, R, vw)`` float32, ``chunk_group`` and ``chunk_valid``
+    (int32 per chunk), the group values (float32, ascending), ``chunk_site``
+    ``(chunks * vw,)`` int32, the site in each lane (0 in padding lanes), and
+    ``view_chunks`` ``(views, 2)`` int32, the chunks each view sums over (all, with one exemplar).
+    """
+    values = np.unique(model.centres)
+    views = model.offsets.shape[0]
+    parts = [_group_table(model.centres[s], model.coded(model.patches[:, s]), values, vw)
+             for s in (model.sites_of(v) for v in (range(views) if model.per_view else [0]))]
+    sizes = np.array([p[1].size for p in parts])
+    begin = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    if model.per_view:
+        view_chunks = np.stack([begin, begin + sizes], axis=1)
+        site_start = [model.sites_of(v).start for v in range(views)]
+    else:
+        view_chunks = np.tile([0, sizes[0]], (views, 1))
+        site_start = [0]
+    patches = np.concatenate([p[0] for p in parts]).copy()
+    chunk_site = np.concatenate([p[3] + start for p, start in zip(parts, site_start)]).astype(np.int32)
+    return (patches, np.concatenate([p[1] for p in parts]), np.concatenate([p[2] for p in parts]),
+            values.astype(np.float32), chunk_site, view_chunks.astype(np.int32))
 
 
 class CLBackend:
@@ -167,7 +189,7 @@ class CLBackend:
         p = self.params
         return programs.build(self.device, SOURCES, {
             "NR": nr, "NCHILD": nr - model.parent_rows,  # the rows after NCHILD: parent terms
-            "VW": self.vw, "VB": self.vb, "NLV": -(-n_labels // self.vw), "NVIEW": views,
+            "VW": self.vw, "VB": self.item_vb, "NLV": -(-n_labels // self.vw), "NVIEW": views,
             "NS": p.n_similar if p.likelihood == "pruned" else 1,
             # PROJ_P: the option, not projected.probe (which a small exemplar's fewer lists clamp):
             # the kernel stops at the last list there is
@@ -250,8 +272,10 @@ class CLBackend:
         self.capacity = int(np.prod(block))
         canon = source_of_site(model)
         pruning = pruned.Pruning(model, params, canon) if params.likelihood == "pruned" else None
+        # a work item's voxel-views share each chunk they load: with an exemplar per view, one per item
+        self.item_vb = 1 if model.per_view else self.vb
         self.k = self._kernels(model, n_labels, None if pruning is None else pruning.projected)
-        patches, chunk_group, chunk_valid, gvals, chunk_site = group_tables(model, self.vw)
+        patches, chunk_group, chunk_valid, gvals, chunk_site, view_chunks = group_tables(model, self.vw)
         self.chunk_site = self._buf(canon[chunk_site])  # the source each lane records
         views = model.offsets.shape[0]
         mf, ctx = cl.mem_flags, self.device.context
@@ -272,7 +296,7 @@ class CLBackend:
         self.n_groups, self.n_chunks = gvals.size, chunk_group.size
         self.patches = self._buf(patches)
         self.chunk_group, self.chunk_valid = self._buf(chunk_group), self._buf(chunk_valid)
-        self.exemplar = (self.patches, self.chunk_group, self.chunk_valid, self.chunk_site)
+        self.exemplar = (self.patches, self.chunk_group, self.chunk_valid, self.chunk_site, self._buf(view_chunks))
         # The Gaussian factor of every (group, label) pair and its log (decide's view_logf).
         self.kern = self._buf(kernel_tables(model, gvals, self._pad(n_labels)))
         self.labels = self._buf(model.labels.astype(np.float32))
@@ -393,7 +417,7 @@ class CLBackend:
         if self.params.likelihood == "pruned":  # with the default settings no voxel can need the exact sum
             n_exact = self._exact_first(voxels) if pruned.may_need_exact(self.params) else 0
         if n_exact:
-            self.k["parzen_groups"](q, (self._global(-(-n_exact * views // self.vb)),), (self.local,),
+            self.k["parzen_groups"](q, (self._global(-(-n_exact * views // self.item_vb)),), (self.local,),
                                     self.scalars_buf, np.int32(n_exact * views), *self.state, self.vox_buf,
                                     self.sums, *self.terms, *self.exemplar)
         if self.params.likelihood == "pruned":

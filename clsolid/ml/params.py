@@ -23,7 +23,7 @@ from ..core.options import (
     views_option,
 )
 from ..core.slices import FALLBACK_SPACING, SEAM_GAP, SEAM_SHOWS
-from ..core.views import VIEW_AXES, VIEW_SETS  # noqa: F401 (VIEW_AXES: this method's name for them too)
+from ..core.views import VIEW_AXES, VIEW_SETS, view_set  # noqa: F401 (VIEW_AXES: this method's name for them too)
 from ..errors import InputError
 from ..phases import is_categorical
 
@@ -277,7 +277,7 @@ class MLParams:
         return tuple(float(v) for v in values)
 
     def for_exemplar(self, n_levels: int, categorical: bool, seam_ratio: float = 0.0,
-                     shape: tuple[int, int] | None = None) -> "MLParams":
+                     shape: tuple[int, int] | None = None, per_view: bool = False) -> "MLParams":
         """These parameters with every option left to the exemplar (None, ``"auto"``) decided.
 
         Parameters
@@ -290,6 +290,9 @@ class MLParams:
             Its :func:`~clsolid.core.slices.seam_ratio`.
         shape : tuple of 2 ints, optional
             Its rows and columns (None: small).
+        per_view : bool
+            Whether each view has its own exemplar: the exact sum then (the pruned one follows
+            sources within one exemplar), and ``likelihood="pruned"`` is refused.
 
         Returns
         -------
@@ -299,8 +302,11 @@ class MLParams:
         k = self.neighborhood
         large = shape is not None and math.prod(window_grid(shape, k)) >= AUTO_PROJECTED_SITES
         likelihood = self.likelihood
+        if per_view and likelihood == "pruned":
+            raise InputError("likelihood='pruned' takes one exemplar; with an exemplar per view use "
+                             "likelihood='exact' (or 'auto', which chooses it)")
         if likelihood == "auto":
-            likelihood = "pruned" if phases or large else "exact"
+            likelihood = "exact" if per_view else "pruned" if phases or large else "exact"
         projected = self.prune_projected
         if projected is None:
             projected = AUTO_PROJECTED_AXES if likelihood == "pruned" and large and not phases else 0
@@ -321,7 +327,7 @@ class MLParams:
             parents = CATEGORICAL_PARENT_WEIGHT if phases else 0.0
         shared = self.shared_weight
         if shared is None:  # measured with two views only
-            shared = CATEGORICAL_SHARED_WEIGHT if phases and self.views == 2 else 1.0
+            shared = CATEGORICAL_SHARED_WEIGHT if phases and self.view_names == VIEW_SETS[2] else 1.0
         resolved = replace(self, likelihood=likelihood, distance=distance, insert_spacing=spacing,
                            falloff=float(falloff), seam_gap=gap, prune_projected=projected,
                            parent_weight=float(parents), shared_weight=float(shared))
@@ -347,7 +353,7 @@ class MLParams:
 
     @property
     def view_names(self) -> tuple[str, ...]:
-        return VIEW_SETS[self.views]
+        return view_set(self.views)
 
     @property
     def heuristic_code(self) -> int:

@@ -35,30 +35,33 @@ def site_distances(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels:
     """``A_p`` ``(m, n)``: each voxel's weighted squared neighbourhood distance to every site
     (weighted mismatch count with ``model.mismatch``): neighbour r's term weighs
     (1 - t_r)^2, times ``model.term_weight[r]`` with a fall-off or parent terms (whose values
-    and temperatures *vol* and *temp* then hold after the block's: ``model.with_parent``)."""
+    and temperatures *vol* and *temp* then hold after the block's: ``model.with_parent``).
+    The sites are *view*'s own (:meth:`ScaleModel.sites_of`)."""
     nb = model.neighbour_coords(voxels, view)
+    patches = model.patches[:, model.sites_of(view)]
     x = vol.ravel()[nb].astype(np.float64)
     w = 1.0 - temp.ravel()[nb].astype(np.float64)
     if model.term_weight is not None:  # the fall-off: each term times its weight
         w = w * np.sqrt(model.term_weight)
     if model.mismatch:
-        diff = difference(x[:, :, None], model.patches[None, :, :], True, model.costs)
+        diff = difference(x[:, :, None], patches[None, :, :], True, model.costs)
         return np.sum((w**2)[:, :, None] * diff, axis=1)
-    diff = w[:, :, None] * (x[:, :, None] - model.patches[None, :, :])  # (m, R, n)
+    diff = w[:, :, None] * (x[:, :, None] - patches[None, :, :])  # (m, R, n)
     return np.sum(diff**2, axis=1)
 
 
 def log_lcpdf(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels: np.ndarray, view: int) -> np.ndarray:
     """Unnormalised ``log f_v(lambda)`` for each voxel and label: ``(m, |Lambda|)``."""
-    return parzen(model, site_distances(model, vol, temp, voxels, view))
+    return parzen(model, site_distances(model, vol, temp, voxels, view), view=view)
 
 
-def parzen(model: ScaleModel, a: np.ndarray, keep: np.ndarray | None = None) -> np.ndarray:
+def parzen(model: ScaleModel, a: np.ndarray, keep: np.ndarray | None = None, view: int = 0) -> np.ndarray:
     """Unnormalised ``log f_v(lambda)`` ``(m, |Lambda|)`` from each voxel's weighted squared
-    neighbourhood distance to every site, *a* ``(m, n)``: the Parzen sum over the sites, or
-    over those where *keep* ``(m, n)`` is True, or, if *keep* is a float array, with each
-    site's term multiplied by it (0: left out)."""
-    dist = (difference(model.labels[None, :, None], model.centres[None, None, :], model.mismatch, model.costs)
+    neighbourhood distance to every site of *view*, *a* ``(m, n)``: the Parzen sum over the
+    sites, or over those where *keep* ``(m, n)`` is True, or, if *keep* is a float array, with
+    each site's term multiplied by it (0: left out)."""
+    centres = model.centres[model.sites_of(view)]
+    dist = (difference(model.labels[None, :, None], centres[None, None, :], model.mismatch, model.costs)
             + a[:, None, :])
     logw = -dist / (2.0 * model.bandwidth**2)
     if keep is not None:
@@ -242,8 +245,8 @@ class ReferenceBackend:
         for v in range(m.offsets.shape[0]):
             a = site_distances(m, vol, temp, voxels, v)
             if exact.any():
-                out[v, exact] = parzen(m, a[exact])
-                self.src[v, voxels[exact]] = self.canon[np.argmin(a[exact], axis=1)]
+                out[v, exact] = parzen(m, a[exact], view=v)
+                self.src[v, voxels[exact]] = self.canon[m.sites_of(v).start + np.argmin(a[exact], axis=1)]
             if not exact.all():
                 out[v, ~exact] = self._pruned_view(v, voxels[~exact], a[~exact], vol)
         return out

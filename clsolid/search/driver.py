@@ -23,6 +23,7 @@ from ..core.schedule import colour_set, set_count, set_order
 from ..core.slices import insert_slices
 from ..core.synthesis import SweepInfo
 from ..errors import InputError
+from ..exemplar import pooled
 from ..phases import is_categorical
 from . import chenwang, coherence, kopf, wl
 from .features import centre_weights, exemplar_features, site_use, valid_sites
@@ -67,11 +68,14 @@ def level_shapes(shape: tuple[int, int, int], levels: int) -> list[tuple[int, in
     return out
 
 
-def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: SearchParams, seed: int,
+def run_search(exemplar: np.ndarray | dict[str, np.ndarray], shape: tuple[int, int, int], params: SearchParams,
+               seed: int,
                make_matcher: Callable[[np.ndarray], Any],
                progress: Callable[[SweepInfo], None] | None = None,
                count_sites: bool = False, categorical: bool | None = None) -> SearchOutput:
-    """Grow a ``shape`` block from a 2D *exemplar* (float grey levels) with ``params.method``.
+    """Grow a ``shape`` block from a 2D *exemplar* (float grey levels) with ``params.method``;
+    or from one exemplar per view (a dict by view, ``params.view_names``' views): each view
+    then searches its own (the exact search; ``wl`` and ``kopf``).
 
     *make_matcher(table, mismatch=n)* returns an object with ``best(queries, weights)`` (a
     :class:`~clsolid.search.match.CLMatcher` or :class:`~clsolid.search.match.ReferenceMatcher`;
@@ -83,31 +87,49 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
     every voxel matched once more in every view. *categorical*: whether the exemplar's values
     are phases (:func:`clsolid.phases.is_categorical`; None: by their number alone).
     """
-    n_values = np.unique(exemplar).size
+    per_view = isinstance(exemplar, dict)
+    pool = pooled(exemplar)
+    n_values = np.unique(pool).size
     categorical = is_categorical(n_values) if categorical is None else categorical
     params = params.for_exemplar(n_values, categorical)
     k = params.neighborhood
     shapes = level_shapes(shape, params.scales)
     if min(shapes[-1]) < 2:
         raise InputError(f"shape={tuple(shape)} is too small for {params.scales} levels")
-    pyr = gaussian_pyramid(exemplar, params.scales)
+    if per_view:
+        check_per_view(params, count_sites)
+        view_pyr = {v: gaussian_pyramid(exemplar[v], params.scales) for v in params.view_names}
+        # a level's pixels pooled over the views: its noise, histogram, values
+        pyr = [pooled({v: p[level] for v, p in view_pyr.items()}) for level in range(params.scales)]
+    else:
+        view_pyr = {None: gaussian_pyramid(exemplar, params.scales)}
+        pyr = view_pyr[None]
     timings: dict = {"levels": []}
     t0 = time.perf_counter()
     coarse, use, source, coh = None, None, None, None
     for level in range(params.scales - 1, -1, -1):
         t_level = time.perf_counter()
-        parent_img = pyr[level + 1] if params.parent and level + 1 < params.scales else None
-        table, centres = exemplar_features(pyr[level], parent_img, k)
-        use_parent = parent_img is not None
-        parent_shape = None if parent_img is None else parent_img.shape
+        with_parent = params.parent and level + 1 < params.scales
+        # each view's sites in turn (one exemplar: its own), with their parents' terms
+        tables = [exemplar_features(p[level], p[level + 1] if with_parent else None, k) for p in view_pyr.values()]
+        table, centres = (np.concatenate(parts) for parts in zip(*tables))
+        use_parent = with_parent
+        parent_shape = view_pyr[next(iter(view_pyr))][level + 1].shape if with_parent else None
         vol = _start(pyr[level], shapes[level], coarse, params.init, seed, level)
-        anchors = _anchor(params, vol, pyr[level], level, seed, shape)
+        level_images = {v: p[level] for v, p in view_pyr.items()} if per_view else pyr[level]
+        anchors = _anchor(params, vol, level_images, level, seed, shape)
         codes = phase_codes(pyr[0]) if params.distance == "weighted" and level == 0 else None
         searched = _searched_table(table, codes, k, params.parent_weight)
-        matcher = make_matcher(searched, mismatch=0 if codes is None else k * k)
+        mismatch = 0 if codes is None else k * k
+        starts = np.cumsum([0] + [t.shape[0] for t, _ in tables])
+        view_matchers = [make_matcher(searched[a:b], mismatch=mismatch)
+                         for a, b in zip(starts[:-1], starts[1:])] if per_view else None
+        matcher = view_matchers[0] if per_view else make_matcher(searched, mismatch=mismatch)
         ctx = _level(params, pyr, level, parent_shape, table, searched, centres, vol, matcher, make_matcher, coh,
                      categorical)
         ctx.codes = codes
+        if per_view:
+            ctx.view_matchers, ctx.view_starts = view_matchers, [int(a) for a in starts[:-1]]
         coh = ctx.coherence
         update = UPDATES[params.method]
         n_sets = set_count(shapes[level], k // 2)
@@ -131,7 +153,7 @@ def run_search(exemplar: np.ndarray, shape: tuple[int, int, int], params: Search
                 _rewrite(ctx, vol, *anchors)
             if progress is not None:
                 now = time.perf_counter()
-                progress(_report(params, level, it, shapes[level], now - t_iter, now - t0, pyr[level], vol))
+                progress(_report(params, level, it, shapes[level], now - t_iter, now - t0, level_images, vol))
             t_iter = time.perf_counter()
         timings["levels"].append({"level": level, "shape": list(shapes[level]), "n_sites": int(table.shape[0]),
                                   "searches": searches, "seconds": time.perf_counter() - t_level})
@@ -197,7 +219,8 @@ def _searched_table(table: np.ndarray, codes: Any, k: int, parent_weight: float)
     return out
 
 
-def _anchor(params: SearchParams, vol: np.ndarray, exemplar: np.ndarray, level: int, seed: int,
+def _anchor(params: SearchParams, vol: np.ndarray, exemplar: np.ndarray | dict[str, np.ndarray], level: int,
+            seed: int,
             shape: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray] | None:
     """Write a level's anchor slices (``insert_spacing``; :func:`clsolid.core.slices.insert_slices`)
     into its starting block *vol*. Returns ``(voxels, values)`` to write again after every
@@ -213,8 +236,22 @@ def _anchor(params: SearchParams, vol: np.ndarray, exemplar: np.ndarray, level: 
     # the coarser slice came up-sampled onto depth d + 1 as well: both start from noise
     mask |= np.roll(mask, 1, axis=0) | np.roll(mask, 1, axis=1) | np.roll(mask, 1, axis=2)
     voxels = np.flatnonzero(mask)
-    np.put(vol, voxels, np.random.default_rng([seed, level, 0xA9C4]).choice(exemplar.ravel(), size=voxels.size))
+    np.put(vol, voxels, np.random.default_rng([seed, level, 0xA9C4]).choice(pooled(exemplar).ravel(),
+                                                                           size=voxels.size))
     return None
+
+
+def check_per_view(params: SearchParams, count_sites: bool = False) -> None:
+    """Refuse what an exemplar per view cannot do: chen-wang's histograms over one exemplar's
+    sites, the coherence search's candidates within one exemplar, a map of one exemplar's sites."""
+    if params.method == "chen-wang":
+        raise InputError("an exemplar per view: chen-wang keeps its histograms over one exemplar's sites; use "
+                         "method 'kopf' or 'wl' (or 'ml')")
+    if params.search != "exact":
+        raise InputError(f"search={params.search!r} follows coherent candidates within one exemplar; with an "
+                         "exemplar per view give search='exact'")
+    if count_sites:
+        raise InputError("site_map=True maps one exemplar's sites; with an exemplar per view there is none")
 
 
 def _rewrite(ctx: Level, vol: np.ndarray, voxels: np.ndarray, values: np.ndarray) -> None:

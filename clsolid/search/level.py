@@ -99,6 +99,8 @@ class Level:
     exhaustive: bool = False  # this pass searches every site even under the coherence search
     seeding: bool = False  # ...and seeds the candidates of the passes after (exact_passes)
     codes: Any = None
+    view_matchers: list | None = None  # an exemplar per view: each view's matcher over its own sites...
+    view_starts: list[int] | None = None  # ...which start there in centres and patches
     _projections: dict = field(default_factory=dict, init=False, repr=False)  # by weights: projection()
 
     @property
@@ -111,7 +113,7 @@ class Level:
     def block(self) -> DeviceBlock | None:
         """The block on an OpenCL matcher's device (:class:`~clsolid.search.block.DeviceBlock`), made
         at the first search; None for another matcher (the float64 reference)."""
-        if not isinstance(self.matcher, CLMatcher):
+        if not isinstance(self.matcher, CLMatcher) or self.view_matchers is not None:
             return None
         return DeviceBlock(self.matcher)
 
@@ -151,6 +153,10 @@ class Level:
         *queries*, their neighbourhoods (:meth:`queries`), are gathered here (on an OpenCL
         matcher's device: :attr:`block`) unless given. Returns ``(site (m,), distance (m,))``."""
         k = self.params.neighborhood
+        if self.view_matchers is not None:  # the view's own exemplar, searched whole on gathered queries
+            site, least = self.view_matchers[view].best(
+                self.queries(view, voxels, vol, coarse) if queries is None else queries, weights)
+            return site + self.view_starts[view], least
         if self.coherence is not None and not self.exhaustive:
             return self.coherence.search(self.matcher, view, voxels, self.searched(vol), coarse, k, weights, queries,
                                          self.block)

@@ -19,7 +19,7 @@ from ..core.options import (
     views_option,
 )
 from ..core.orders import ORDERS
-from ..core.views import VIEW_SETS
+from ..core.views import view_set
 from ..errors import InputError
 from .match import MAX_K
 
@@ -227,7 +227,7 @@ class SearchParams:
 
     @property
     def view_names(self) -> tuple[str, ...]:
-        return VIEW_SETS[self.views]
+        return view_set(self.views)
 
     @property
     def insert_slices(self) -> int | None:

@@ -21,6 +21,9 @@ inline void add_chunk(floatv a, float cmin, float k, float *gmin, float *gsum)
  * underflows whatever the window size or the number of grey levels.
  * src[view * n_vox + voxel] receives the voxel's source for the pruned likelihood: the site of
  * least A, as chunk_site[c * VW + lane] names each lane's (the lowest site with its neighbourhood).
+ * A view sums over chunks view_chunks[2 view] to view_chunks[2 view + 1]: every chunk with one
+ * exemplar, its own exemplar's with one per view (the host then builds VB = 1, so that the
+ * items of a work item never need different chunks).
  */
 __kernel void parzen_groups(__constant const ml_scalars *P, int n_items,
                             /* the state */
@@ -34,12 +37,15 @@ __kernel void parzen_groups(__constant const ml_scalars *P, int n_items,
                             /* the exemplar's sites */
                             __global const float *patches,    /* [chunk][NR][VW] */
                             __global const int *chunk_group, __global const int *chunk_valid,
-                            __global const int *chunk_site)   /* [chunk * VW + lane] */
+                            __global const int *chunk_site,   /* [chunk * VW + lane] */
+                            __global const int *view_chunks)  /* [view][2]: first and end chunk */
 {
     int first = get_global_id(0) * VB;
     if (first >= n_items) return;
     const int Z = P->Z, Y = P->Y, X = P->X, n_vox = P->n_vox, n_views = P->n_views;
-    const int n_chunks = P->n_chunks, n_groups = P->n_groups;
+    const int n_groups = P->n_groups;
+    const int view0 = first % n_views;   /* every item's view sums over the same chunks (see above) */
+    const int c_begin = view_chunks[2 * view0], c_end = view_chunks[2 * view0 + 1];
     const float k = P->k;
 
     float xw[VB][NR], w[VB][NR];
@@ -57,7 +63,7 @@ __kernel void parzen_groups(__constant const ml_scalars *P, int n_items,
     int best_chunk[VB];
     for (int b = 0; b < VB; ++b) {
         best[b] = INFINITY;
-        best_chunk[b] = 0;
+        best_chunk[b] = c_begin;
     }
     for (int b = 0; b < VB; ++b)
         for (int g = 0; g < n_groups; ++g) {
@@ -73,7 +79,7 @@ __kernel void parzen_groups(__constant const ml_scalars *P, int n_items,
                              , 8, 9, 10, 11, 12, 13, 14, 15
 #endif
                              );
-    for (int c = 0; c < n_chunks; ++c) {
+    for (int c = c_begin; c < c_end; ++c) {
         /* Plain operators, not fma()/vload(): PoCL leaves those builtins as calls. The
          * chunk is 4*VW-byte aligned (buffers are, and chunks are whole vectors). */
         __global const floatv *pc = (__global const floatv *)(patches + (size_t)c * NR * VW);

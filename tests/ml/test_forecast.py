@@ -70,7 +70,8 @@ def test_a_scale_too_large_to_replay_is_forecast_on_a_smaller_block(device, monk
 def _scale_stub(level: int, side: int):
     from types import SimpleNamespace
 
-    return SimpleNamespace(level=level, shape=(side,) * 3, n_sites=10_000, patches=np.zeros((120, 1)))
+    return SimpleNamespace(level=level, shape=(side,) * 3, n_sites=10_000, patches=np.zeros((120, 1)),
+                           per_view=False)
 
 
 @pytest.mark.parametrize("searching_sweeps, want", [(1, 10.0), (2, 5.0 + 30.0)])

@@ -174,7 +174,7 @@ def test_bad_shared_weight_is_refused(bad):
 
 def test_group_tables_cover_every_site_once(small_labels):
     model = build_scale(small_labels, (8, 8, 8), MLParams(neighborhood=5, scales=1), 0)
-    patches, chunk_group, chunk_valid, values, chunk_site = group_tables(model, 16)
+    patches, chunk_group, chunk_valid, values, chunk_site, view_chunks = group_tables(model, 16)
     assert chunk_valid.sum() == model.n_sites
     real = (np.arange(16)[None, :] < chunk_valid[:, None]).ravel()
     np.testing.assert_array_equal(np.sort(chunk_site[real]), np.arange(model.n_sites))  # each site's lane
