@@ -112,15 +112,19 @@ def _ml_state(model, seed: int, sources: bool = False):
     return vol, temp, src, parent
 
 
-def _ml_backends(device: Device, shape, seed: int = 0, sources: bool = False, **options):
-    """The OpenCL and the reference back end started on one scale of *options*' model, one state."""
+def _ml_backends(device: Device, shape, seed: int = 0, sources: bool = False, per_view: bool = False, **options):
+    """The OpenCL and the reference back end started on one scale of *options*' model, one
+    state; with *per_view*, each view its own exemplar, of its own size."""
     from clsolid.ml.model import build_scale
     from clsolid.ml.opencl import CLBackend
     from clsolid.ml.params import MLParams
     from clsolid.ml.reference import ReferenceBackend
 
     params = MLParams(**{"scales": 1, **options})
-    model = build_scale(_labels(), shape, params, 0)
+    labels = _labels()
+    if per_view:
+        labels = {"front": labels, "right": labels.T[:10, :11].copy(), "top": labels[1:10, 2:11].copy()}
+    model = build_scale(labels, shape, params, 0)
     vol, temp, src, parent = _ml_state(model, seed, sources)
     backends = CLBackend(device, vector_width=VECTOR_WIDTH), ReferenceBackend()
     for b in backends:
@@ -128,17 +132,20 @@ def _ml_backends(device: Device, shape, seed: int = 0, sources: bool = False, **
     return model, backends, (model.with_parent(vol, parent), model.with_parent(temp, np.zeros(temp.shape)))
 
 
-def _assert_lcpdfs_agree(device: Device, shape, sources: bool = False, **options) -> None:
+def _assert_lcpdfs_agree(device: Device, shape, sources: bool = False, per_view: bool = False, **options) -> None:
     """The normalised log LCPDFs of one conflict-free set, kernels against the reference (the
     fast tests' tolerance), and the sources recorded on the way: sites as near as the
     reference's (on a tie, another site may be the one recorded)."""
     from clsolid.ml.reference import site_distances
 
-    model, (cl_b, ref), (vol, temp) = _ml_backends(device, shape, sources=sources, **options)
+    model, (cl_b, ref), (vol, temp) = _ml_backends(device, shape, sources=sources, per_view=per_view, **options)
     voxels = np.flatnonzero(model.colour.ravel() == 0)
     got, want = cl_b.lcpdf(voxels), ref.lcpdf(voxels)
     np.testing.assert_allclose(got, want, atol=2e-3 * max(1.0, np.abs(want).max() / 100))
     rows = np.arange(voxels.size)
+    if model.per_view:  # sources serve the pruned sum, which takes one exemplar: in range is enough
+        assert np.all((cl_b.sources()[:, voxels] >= 0) & (cl_b.sources()[:, voxels] < model.n_sites))
+        return
     for view in range(model.offsets.shape[0]):
         a = site_distances(model, vol, temp, voxels, view)
         np.testing.assert_allclose(a[rows, cl_b.sources()[view, voxels]], a[rows, ref.sources()[view, voxels]],
@@ -163,12 +170,13 @@ def init(device: Device) -> None:
 @case
 def exact(device: Device) -> None:
     """parzen_groups and lcpdf: squared differences, phase mismatches and weighted ones, a
-    fall-off, parent terms."""
+    fall-off, parent terms, an exemplar per view (each view its own run of chunks)."""
     shape = (5, 6, 7)
     _assert_lcpdfs_agree(device, shape, neighborhood=5, views=3)
     _assert_lcpdfs_agree(device, shape, neighborhood=3, distance="mismatch", falloff=1.0)
     _assert_lcpdfs_agree(device, shape, neighborhood=3, views=3, distance="weighted")
     _assert_lcpdfs_agree(device, shape, neighborhood=3, scales=2, parent_weight=4.0, parent_min_side=0)
+    _assert_lcpdfs_agree(device, shape, per_view=True, neighborhood=3, views=3)
 
 
 @case
