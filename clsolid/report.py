@@ -60,14 +60,15 @@ def read_sidecar(volume_path: Any) -> tuple[pathlib.Path, dict | None]:
         return sidecar, None
 
 
-def like_with_like(exemplar: np.ndarray, sidecar: pathlib.Path, meta: dict | None
-                   ) -> tuple[np.ndarray, int | None, str]:
+def like_with_like(exemplar: np.ndarray | dict[str, np.ndarray], sidecar: pathlib.Path, meta: dict | None
+                   ) -> tuple[np.ndarray | dict[str, np.ndarray], int | None, str]:
     """Put the exemplar in the units of a ``clsolid synth`` volume, from its sidecar
     (:func:`read_sidecar`).
 
     A volume of level means is compared after quantising both into the synthesis's
-    levels; a volume of level indices against the exemplar's indices; a volume of the
-    exemplar's exact values as it is. Without a sidecar nothing changes.
+    levels; a volume of level indices against the exemplar's indices (an exemplar per view,
+    a dict, on their shared levels); a volume of the exemplar's exact values as it is.
+    Without a sidecar nothing changes.
 
     Returns
     -------
@@ -174,8 +175,10 @@ def format_table(report: dict) -> str:
     lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
     lines.insert(1, "  ".join("-" * w for w in widths))
     s = report["settings"]
-    ex, vol = report["exemplar"]["shape"], report["volume"]["shape"]
-    head = (f"exemplar {ex[0]}x{ex[1]}, volume {vol[0]}x{vol[1]}x{vol[2]} (Z,Y,X); "
+    vol = report["volume"]["shape"]
+    exemplars = report.get("exemplars") or {"": report["exemplar"]}  # one, or each view's
+    shapes = ", ".join(f"{v + ' ' if v else ''}{e['shape'][0]}x{e['shape'][1]}" for v, e in exemplars.items())
+    head = (f"exemplar{'s' if len(exemplars) > 1 else ''} {shapes}, volume {vol[0]}x{vol[1]}x{vol[2]} (Z,Y,X); "
             f"{s['max_slices'] or 'all'} slices per view; {s['reference_repeats']} reference repeats")
     legend = ["cells: value [score]; score = (value - floor) / (ceiling - floor): ~0 as good as the "
               "exemplar itself, ~1 no more structure than shuffled pixels (noise for histograms)",
@@ -191,7 +194,8 @@ def format_table(report: dict) -> str:
 def _stats_table(report: dict) -> str:
     """First-order statistics of the exemplar and of each view's slices, side by side."""
     views = report["views"]
-    cols = [("exemplar", report["exemplar"]["stats"])] + [
+    exemplars = report.get("exemplars") or {"": report["exemplar"]}
+    cols = [(f"{v + ' ' if v else ''}exemplar", e["stats"]) for v, e in exemplars.items()] + [
         (f"{v}{'*' if rep['constrained'] else ''}", rep["stats"]) for v, rep in views.items()]
     rows = [["statistic"] + [c for c, _ in cols]]
     for key in ("mean", "mad", "std", "variance", "skewness", "kurtosis"):

@@ -18,10 +18,15 @@ def add_evaluate(sub: Any) -> argparse.ArgumentParser:
                        description="Objective statistics between a 2D exemplar and the slices of a volume.")
     p.add_argument("exemplar", nargs="?", metavar="EXEMPLAR", help="2D exemplar image (.npy, .tif/.tiff, .png)")
     p.add_argument("volume", nargs="?", metavar="VOLUME", help="3D (Z, Y, X) volume (.npy, .tif/.tiff)")
+    for view, plane in (("front", "(y, x)"), ("right", "(y, z)"), ("top", "(z, x)")):
+        p.add_argument(f"--{view}", metavar="IMAGE", default=None,
+                       help=f"the {view} view's own exemplar, the {plane} plane: with an exemplar per view, give "
+                            "VOLUME alone and each view is compared with its own")
     p.add_argument("--views", nargs="+", choices=VIEWS, default=list(VIEWS),
                    help="views to report (default: all three)")
-    p.add_argument("--constrained", nargs="*", choices=VIEWS, default=["front", "right"],
-                   help="views the synthesis constrained, for labelling (default: front right)")
+    p.add_argument("--constrained", nargs="*", choices=VIEWS, default=None,
+                   help="views the synthesis constrained, for labelling (default: as VOLUME's sidecar records; "
+                        "without one, the views with an exemplar of their own, else all three)")
     p.add_argument("--levels", type=int, default=None,
                    help="quantise both into this many grey levels before the histogram statistics (default: as "
                         "`clsolid synth` made VOLUME, read from its JSON sidecar; without one, the grey levels "
@@ -73,11 +78,20 @@ def _run_evaluation(args: argparse.Namespace) -> None:
         read_sidecar,
     )
 
-    if args.exemplar is None or args.volume is None:
+    per_view = {v: getattr(args, v) for v in VIEWS if getattr(args, v) is not None}
+    if per_view:
+        if args.volume is not None:
+            raise InputError(f"EXEMPLAR {args.exemplar!r} and {', '.join('--' + v for v in per_view)} both given: "
+                             "with an exemplar per view give VOLUME alone")
+        args.volume, args.exemplar = args.exemplar, None
+        if args.volume is None:
+            raise InputError("VOLUME is required")
+    elif args.exemplar is None or args.volume is None:
         raise InputError("EXEMPLAR and VOLUME are both required (or give only --track FILE.json)")
     if args.max_slices is not None and args.max_slices < 0:
         raise InputError(f"--max-slices={args.max_slices} must be >= 0 (0 = all slices)")
-    exemplar = load_exemplar(args.exemplar)
+    exemplar = ({v: load_exemplar(path) for v, path in per_view.items()} if per_view
+                else load_exemplar(args.exemplar))
     volume = load_volume(args.volume)
     sidecar, meta = read_sidecar(args.volume)
     levels = args.levels
@@ -90,10 +104,14 @@ def _run_evaluation(args: argparse.Namespace) -> None:
         exclude, note = inserted_from_sidecar(sidecar, meta, volume.shape)
         if note:
             print(note)
-    report = evaluate(exemplar, volume, views=args.views, constrained=args.constrained or (),
+    constrained = args.constrained
+    if constrained is None:
+        constrained = _constrained(meta, per_view)
+    report = evaluate(exemplar, volume, views=args.views, constrained=constrained,
                       levels=levels, max_slices=args.max_slices or None, rng=args.seed,
                       reference_repeats=args.repeats, periodic=not args.non_periodic, exclude=exclude)
-    report["files"] = {"exemplar": str(args.exemplar), "volume": str(args.volume)}
+    report["files"] = {"exemplar": ({v: str(p) for v, p in per_view.items()} if per_view else str(args.exemplar)),
+                       "volume": str(args.volume)}
     print(format_table(report))
     if args.output:
         with open(args.output, "w", encoding="utf-8") as fh:
@@ -102,6 +120,15 @@ def _run_evaluation(args: argparse.Namespace) -> None:
     if args.plot:
         plot_report(report, args.plot)
         print(f"plot written to {args.plot}")
+
+
+def _constrained(meta: dict | None, per_view: dict) -> tuple[str, ...]:
+    """The views a synthesis constrained: as its sidecar records them, else those with an
+    exemplar of their own, else all three (``clsolid synth``'s default)."""
+    from ..core.views import view_set
+
+    recorded = view_set((meta or {}).get("params", {}).get("views")) if isinstance(meta, dict) else None
+    return recorded or tuple(per_view) or VIEWS
 
 
 def _run_track(args: argparse.Namespace) -> None:

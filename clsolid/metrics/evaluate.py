@@ -31,8 +31,10 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
 
     Parameters
     ----------
-    exemplar : array_like, 2D
-        The exemplar (at least 16 x 16; treated as non-periodic).
+    exemplar : array_like, 2D, or dict
+        The exemplar (at least 16 x 16; treated as non-periodic); or one per view, a dict
+        ``{view: exemplar}`` as :func:`clsolid.synthesize` takes them: each view is then
+        compared with its own, and a view without one is left out.
     volume : array_like, (Z, Y, X)
         The synthesised volume (every side at least 8).
     views : sequence of {"front", "right", "top"}
@@ -63,7 +65,8 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
     dict
         JSON-able report (Python types only; NaN never appears, undefined values are None):
         ``settings`` (every choice made, and the families skipped and why), ``exemplar``,
-        ``volume``, ``views`` and ``summary`` (one row per view and distance). Each view
+        ``volume``, ``views`` and ``summary`` (one row per view and distance); with an
+        exemplar per view, ``exemplars`` too (each view's shape and statistics). Each view
         holds its ``constrained`` flag and ``label``, the slice indices used, first-order
         ``stats``, the curves behind each distance (histograms, autocorrelation maps,
         orientation histograms, fringe and phase statistics) and ``distances``; each
@@ -79,6 +82,10 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
     Cost grows with the slices measured, most of it tracing fringes (timings:
     docs/benchmarks.md).
     """
+    if isinstance(exemplar, Mapping):
+        return _evaluate_per_view(exemplar, volume, views=views, constrained=constrained, levels=levels,
+                                  max_slices=max_slices, rng=rng, reference_repeats=reference_repeats,
+                                  periodic=periodic, exclude=exclude)
     ex = as_image(exemplar, "exemplar", min_side=MIN_EXEMPLAR_SIDE)
     vol = as_volume(volume, "volume", min_side=MIN_VOLUME_SIDE)
     views = check_views(views, "views")
@@ -115,6 +122,30 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
         "summary": _summary(report_views),
     }
     return jsonable(report)
+
+
+def _evaluate_per_view(exemplars: Mapping[str, Any], volume: Any, *, views: Any, **kw: Any) -> dict[str, Any]:
+    """:func:`evaluate` with an exemplar per view: each view's report against its own
+    exemplar (its own floor and ceiling), in one report whose ``exemplar`` is the first's and
+    ``exemplars`` every view's (shape and statistics)."""
+    views = check_views(views, "views")
+    unknown = [v for v in exemplars if v not in VIEWS]
+    if unknown:
+        raise InputError(f"exemplars are given for {unknown!r}; views are {', '.join(VIEWS)}")
+    measured = [v for v in views if v in exemplars]
+    if not measured:
+        raise InputError(f"views={list(views)!r}: none has an exemplar (given for {', '.join(exemplars)})")
+    reports = {v: evaluate(exemplars[v], volume, views=(v,), **kw) for v in measured}
+    first = reports[measured[0]]
+    left_out = [v for v in views if v not in exemplars]
+    return {**first,
+            "settings": {**first["settings"], "views": measured,
+                         "skipped": {**first["settings"]["skipped"],
+                                     **({"views " + ", ".join(left_out): "no exemplar of their own"}
+                                        if left_out else {})}},
+            "exemplars": {v: r["exemplar"] for v, r in reports.items()},
+            "views": {v: r["views"][v] for v, r in reports.items()},
+            "summary": [row for r in reports.values() for row in r["summary"]]}
 
 
 def _floors(families: list[Family], setup: Setup, gen: np.random.Generator,

@@ -42,7 +42,8 @@ def files(tmp_path_factory):
 @pytest.fixture(scope="module")
 def report(files, tmp_path_factory):
     out = tmp_path_factory.mktemp("out") / "report.json"
-    argv = [files / "ex.npy", files / "vol.tif", "-o", out, "--repeats", "3", "--max-slices", "8"]
+    argv = [files / "ex.npy", files / "vol.tif", "-o", out, "--repeats", "3", "--max-slices", "8",
+            "--constrained", "front", "right"]
     assert run(argv) == EXIT_OK
     return json.loads(out.read_text())
 
@@ -51,6 +52,15 @@ def report(files, tmp_path_factory):
 def no_matplotlib(monkeypatch):
     for name in ("matplotlib", "matplotlib.figure", "matplotlib.backends", "matplotlib.backends.backend_agg"):
         monkeypatch.setitem(sys.modules, name, None)
+
+
+def test_constrained_views_default_to_the_sidecars_then_the_exemplars_then_all():
+    from clsolid.cli.evaluate import _constrained
+
+    assert _constrained({"params": {"views": 2}}, {}) == ("front", "right")
+    assert _constrained({"params": {"views": "front+top"}}, {"right": "r.tif"}) == ("front", "top")
+    assert _constrained(None, {"front": "f.tif", "top": "t.tif"}) == ("front", "top")
+    assert _constrained(None, {}) == ("front", "right", "top")
 
 
 def test_evaluate_prints_a_table_and_writes_json(files, capsys, tmp_path):

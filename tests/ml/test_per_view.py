@@ -210,3 +210,23 @@ def test_the_cli_takes_an_exemplar_per_view_and_its_sidecar_grows_it_again(tmp_p
     assert main(["synth", "--config", str(tmp_path / "v.json"), "-o", str(again), "-q", "--device", name]) == 0
     np.testing.assert_array_equal(np.load(again), np.load(out))
     assert main(["synth", "brick", *flags, "-o", str(tmp_path / "x.npy")]) == EXIT_USAGE
+
+
+def test_evaluate_compares_each_view_with_its_own_exemplar(tmp_path, capsys):
+    from clsolid import metrics
+    from clsolid.cli import EXIT_USAGE, main
+
+    cuts = _sections(side=32)
+    vol = np.stack([cuts["front"][:16, :16]] * 16)  # every front slice the front section: the front view fits
+    report = metrics.evaluate({"front": cuts["front"][:16, :16], "top": cuts["top"]}, vol, reference_repeats=2)
+    assert list(report["views"]) == ["front", "top"] and set(report["exemplars"]) == {"front", "top"}
+    assert "views right" in report["settings"]["skipped"]  # no exemplar of its own
+    rows = {(r["view"], r["metric"]): r["value"] for r in report["summary"]}
+    assert rows[("front", "histogram_kl")] < rows[("top", "histogram_kl")] + 1e-9
+    np.save(tmp_path / "v.npy", vol)
+    for view in ("front", "top"):
+        np.save(tmp_path / f"{view}.npy", cuts[view])
+    flags = ["--front", str(tmp_path / "front.npy"), "--top", str(tmp_path / "top.npy")]
+    assert main(["evaluate", *flags, str(tmp_path / "v.npy"), "--repeats", "2"]) == 0
+    assert "exemplars front 32x32, top 32x32" in capsys.readouterr().out
+    assert main(["evaluate", str(tmp_path / "front.npy"), str(tmp_path / "v.npy"), *flags]) == EXIT_USAGE
