@@ -29,12 +29,26 @@ class Device:
         The ``pyopencl`` objects.
     programs : dict
         Program cache of this context, keyed by (source, options); see ``clsolid.core.programs``.
+    limits : dict
+        Each kernel's work-group limit on this device, read once (:mod:`clsolid.core.launch`).
+    group_cap : int or None
+        A work-group limit below the device's (:attr:`max_group`).
     """
 
     device: Any
     context: Any
     queue: Any
     programs: dict = field(default_factory=dict, repr=False)
+    limits: dict = field(default_factory=dict, repr=False)  # each kernel's work-group limit (core.launch)
+    #: The most work-items clsolid puts in a work-group here, below the device's own limit
+    #: (None: that limit): tests set it to the limits GPUs impose (docs/design.md#gpu-shaped-launches).
+    group_cap: int | None = None
+
+    @property
+    def max_group(self) -> int:
+        """The most work-items a work-group may hold: the device's limit, or :attr:`group_cap` below it."""
+        own = int(self.device.max_work_group_size)
+        return own if self.group_cap is None else min(own, int(self.group_cap))
 
     @property
     def name(self) -> str:

@@ -9,6 +9,7 @@ import time
 import numpy as np
 
 from ..core import programs
+from ..core.launch import launch
 from ..balance import n_score_slots, score_stride
 from ..core.device import Device
 from ..errors import DeviceMemoryError, InputError
@@ -211,10 +212,6 @@ class CLBackend:
     def _pad(self, n: int) -> int:
         return -(-n // self.vw) * self.vw
 
-    def _global(self, n: int, local: int | None = None) -> int:
-        local = local or self.local
-        return -(-max(n, 1) // local) * local
-
     def _buf(self, array: np.ndarray, writable: bool = False):
         import pyopencl as cl
 
@@ -244,10 +241,10 @@ class CLBackend:
         buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, part.size * _F4)
         key = seed_key(seed)
         px = self._buf(pixels.astype(np.float32).ravel())
-        k["init_random"](self.device.queue, (self._global(part.size),), (self.local,), buf,
-                         np.int32(shape[0]), np.int32(shape[1]), np.int32(shape[2]), np.int64(first),
-                         np.int32(part.size), np.uint32(key[0]), np.uint32(key[1]), np.uint32(TAG_INIT), px,
-                         np.uint32(pixels.size))
+        launch(self.device, k["init_random"], part.size, self.local, buf,
+               np.int32(shape[0]), np.int32(shape[1]), np.int32(shape[2]), np.int64(first),
+               np.int32(part.size), np.uint32(key[0]), np.uint32(key[1]), np.uint32(TAG_INIT), px,
+               np.uint32(pixels.size))
         cl.enqueue_copy(self.device.queue, part, buf)
         return part
 
@@ -417,26 +414,26 @@ class CLBackend:
         if self.params.likelihood == "pruned":  # with the default settings no voxel can need the exact sum
             n_exact = self._exact_first(voxels) if pruned.may_need_exact(self.params) else 0
         if n_exact:
-            self.k["parzen_groups"](q, (self._global(-(-n_exact * views // self.item_vb)),), (self.local,),
-                                    self.scalars_buf, np.int32(n_exact * views), *self.state, self.vox_buf,
-                                    self.sums, *self.terms, *self.exemplar)
+            launch(self.device, self.k["parzen_groups"], -(-n_exact * views // self.item_vb), self.local,
+                   self.scalars_buf, np.int32(n_exact * views), *self.state, self.vox_buf,
+                   self.sums, *self.terms, *self.exemplar)
         if self.params.likelihood == "pruned":
             self.exact_visits += n_exact
             self.pruned_visits += voxels.size - n_exact
         if n_exact < voxels.size:
-            items = (self._global(n_items - n_exact * views, self.item_local),)
+            items = n_items - n_exact * views
             item_range = (np.int32(n_exact * views), np.int32(n_items))
             if self.projection is not None and self.n_projected:
                 q.finish()  # timed alone: the sweeps without it are the ETA's rate
                 t0 = time.perf_counter()
-                self.k["projected_nearest"](q, items, (self.item_local,), self.scalars_buf, *item_range,
-                                            self.vol_buf, self.vox_buf, self.offsets, *self.projection,
-                                            self.projected_out)
+                launch(self.device, self.k["projected_nearest"], items, self.item_local, self.scalars_buf, *item_range,
+                       self.vol_buf, self.vox_buf, self.offsets, *self.projection,
+                       self.projected_out)
                 q.finish()
                 self.search_seconds += time.perf_counter() - t0
-            self.k["parzen_candidates"](q, items, (self.item_local,), self.scalars_buf, *item_range,
-                                        *self.state, self.vox_buf, self.sums, *self.terms, *self.coherence,
-                                        *self.windows, self.projected_out)
+            launch(self.device, self.k["parzen_candidates"], items, self.item_local, self.scalars_buf, *item_range,
+                   *self.state, self.vox_buf, self.sums, *self.terms, *self.coherence,
+                   *self.windows, self.projected_out)
         return n_items
 
     def _exact_first(self, voxels: np.ndarray) -> int:
@@ -446,9 +443,9 @@ class CLBackend:
 
         q = self.device.queue
         flags = np.empty(voxels.size, np.int32)
-        self.k["prune_flags"](q, (self._global(voxels.size, self.item_local),), (self.item_local,), self.scalars_buf,
-                              np.int32(voxels.size), self.temp_buf, self.src, self.vox_buf, self.offsets,
-                              self.flags_buf)
+        launch(self.device, self.k["prune_flags"], voxels.size, self.item_local, self.scalars_buf,
+               np.int32(voxels.size), self.temp_buf, self.src, self.vox_buf, self.offsets,
+               self.flags_buf)
         cl.enqueue_copy(q, flags, self.flags_buf)
         exact = flags.astype(bool)
         voxels[:] = np.concatenate([voxels[exact], voxels[~exact]])
@@ -457,9 +454,9 @@ class CLBackend:
 
     def _update_batch(self, voxels: np.ndarray) -> None:
         self._parzen(voxels)
-        self.k["decide"](self.device.queue, (self._global(voxels.size, self.item_local),), (self.item_local,),
-                         self.scalars_buf, np.int32(voxels.size), self.vol_buf, self.temp_buf, self.vox_buf,
-                         self.sums, self.kern, self.labels, self.union, self.bias, self.scores_buf)
+        launch(self.device, self.k["decide"], voxels.size, self.item_local,
+               self.scalars_buf, np.int32(voxels.size), self.vol_buf, self.temp_buf, self.vox_buf,
+               self.sums, self.kern, self.labels, self.union, self.bias, self.scores_buf)
 
     def read_voxels(self, voxels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The values, temperatures and sources ``(views, m)`` of some voxels of the block (its
@@ -472,8 +469,8 @@ class CLBackend:
             batch = np.ascontiguousarray(voxels[i: i + self.batch], np.int32)
             n = batch.size
             cl.enqueue_copy(q, self.vox_buf, batch)
-            self.k["pack_state"](q, (self._global(n),), (self.local,), self.scalars_buf, np.int32(n), *self.state,
-                                 self.vox_buf, *self.packed)
+            launch(self.device, self.k["pack_state"], n, self.local, self.scalars_buf, np.int32(n), *self.state,
+                   self.vox_buf, *self.packed)
             part_values, part_sources = np.empty((2, n), np.float32), np.empty((views, n), np.int32)
             cl.enqueue_copy(q, part_values, self.packed[0])
             cl.enqueue_copy(q, part_sources, self.packed[1])
@@ -555,8 +552,8 @@ class CLBackend:
         n_labels = self.model.labels.size
         out = np.empty(n_items * n_labels, np.float32)
         buf = cl.Buffer(self.device.context, cl.mem_flags.WRITE_ONLY, out.nbytes)
-        self.k["lcpdf"](self.device.queue, (self._global(n_items),), (self.local,), self.scalars_buf,
-                        np.int32(n_items), self.sums, self.kern, buf)
+        launch(self.device, self.k["lcpdf"], n_items, self.local, self.scalars_buf,
+               np.int32(n_items), self.sums, self.kern, buf)
         cl.enqueue_copy(self.device.queue, out, buf)
         return out.reshape(voxels.size, -1, n_labels)[rows].transpose(1, 0, 2)
 

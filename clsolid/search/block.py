@@ -9,6 +9,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..core.launch import launch
 from ..core import programs
 from ..core.views import VIEW_AXES
 from ..errors import DeviceMemoryError
@@ -69,8 +70,8 @@ class DeviceBlock:
         axes = tuple(map(np.int32, VIEW_AXES[view]))
 
         def gather(start: int, n: int) -> None:
-            program["voxel_queries"](matcher.device.queue, (-(-n // LOCAL) * LOCAL,), (LOCAL,), *leading, *axes,
-                                     voxels_buf, np.int32(start), np.int32(n), matcher.query_buffer)
+            launch(matcher.device, program["voxel_queries"], n, LOCAL, *leading, *axes,
+                   voxels_buf, np.int32(start), np.int32(n), matcher.query_buffer)
 
         return program, gather
 
@@ -101,8 +102,8 @@ class DeviceBlock:
 
         def fill(start: int, n: int) -> None:
             gather(start, n)
-            program["project_queries"](queue, (-(-n // LOCAL) * LOCAL,), (LOCAL,), matcher.query_buffer, np.int32(n),
-                                       basis, offset, projected.query_buffer)
+            launch(matcher.device, program["project_queries"], n, LOCAL, matcher.query_buffer, np.int32(n),
+                   basis, offset, projected.query_buffer)
             cl.enqueue_copy(queue, queries[start : start + n], matcher.query_buffer)
 
         site = projected.nearest_filled(voxels.size, 1, fill)[0][:, 0]

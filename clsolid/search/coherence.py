@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from ..core.launch import launch
 from ..core.views import VIEW_AXES
 from ..errors import DeviceMemoryError
 from .block import DeviceBlock
@@ -275,7 +276,7 @@ class DeviceSearch:
         leading, voxels_buf = self.block.send(vol, coarse, voxels)
         row_axis, col_axis = VIEW_AXES[coh.views[i]]
         cl.enqueue_copy(queue, self._spare, self._matched[i])
-        kernel(queue, (-(-m // LOCAL) * LOCAL,), (LOCAL,), *leading, np.int32(row_axis), np.int32(col_axis),
+        launch(matcher.device, kernel, m, LOCAL, *leading, np.int32(row_axis), np.int32(col_axis),
                voxels_buf, np.int32(m),
                self._matched[i], self._spare, self._shift, self._similar, np.int32(coh.similar.shape[0]), lay.places,
                lay.rows, lay.weights, self._excess, np.float32(coh.spread_eps or 0.0), self._sites, self._dists)

@@ -22,6 +22,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..core.launch import launch
 from ..core import programs
 from ..core.device import Device
 from ..core.probe import VECTOR_WIDTHS, probe
@@ -349,7 +350,7 @@ class CLMatcher:
             n = min(batch, n_queries - i)
             fill(i, n)
             items = -(-n // per_item)
-            kernel(queue, (-(-items // LOCAL) * LOCAL,), (LOCAL,), self._queries, lay.places, lay.table_t, lay.weights,
+            launch(self.device, kernel, items, LOCAL, self._queries, lay.places, lay.table_t, lay.weights,
                    np.int32(n), np.int32(self.n_pad), self._site, self._dist)
             cl.enqueue_copy(queue, idx[i : i + n], self._site)
             cl.enqueue_copy(queue, dist[i : i + n], self._dist)
@@ -382,7 +383,7 @@ class CLMatcher:
             cl.enqueue_copy(queue, self._queries, q[i : i + n])
             cl.enqueue_copy(queue, self._site, cand[i : i + n])
             lay = self._layout
-            kernel(queue, (-(-n // LOCAL) * LOCAL,), (LOCAL,), self._queries, lay.places, lay.rows, lay.weights,
+            launch(self.device, kernel, n, LOCAL, self._queries, lay.places, lay.rows, lay.weights,
                    self._site, np.int32(n), np.int32(n_cand), self._dist)
             cl.enqueue_copy(queue, out[i : i + n], self._dist)
         return out
