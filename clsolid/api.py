@@ -13,6 +13,7 @@ from .core.hostmemory import check_host_memory, check_scratch_space, exemplar_te
 from .core.options import names, refuse_unknown
 from .core.scratch import Scratch
 from .core.slices import seam_ratio
+from .core.despeckle import despeckle
 from .core.synthesis import SweepInfo, SynthesisResult, check_shape, resolve_seed
 from .errors import ExemplarWarning, InputError
 from .ml.backends import FOOTPRINT, SCRATCH_FOOTPRINT, BackendOptions, backend_options, is_reference, make_backend
@@ -289,6 +290,8 @@ def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_outp
         # the result is there too, in files that go when its arrays do
         store = scratch if on_disk else Scratch()
         labels = store.apply(np.rint, np.uint8 if levels_of.values.size <= 256 else np.uint16, vol, kept=True)
+        if params.despeckle and is_categorical(levels_of.values.size, levels_of.exact):
+            timings["despeckled"] = despeckle(labels)
         values = None
         if full_output or output != "labels":
             values = store.apply(levels_of.to_values, levels_of.values.dtype, labels, kept=True)
@@ -416,6 +419,8 @@ def _synthesize_search(exemplar, shape, params: SearchParams, rng, device, progr
                                            categorical=categorical)
     if params.keeps_exemplar_values(categorical):  # exact: each voxel is one of the values
         vol = vol.astype(levels_of.values.dtype)
+        if params.despeckle and categorical and method != "chen-wang":  # chen-wang's voxels stay copies (its map)
+            timings["despeckled"] = despeckle(vol)
     if not full_output:
         return vol
     effective = {**params.to_dict(), "shape": list(shape)}

@@ -518,6 +518,12 @@ def views_option() -> Any:
                   check=Views())
 
 
+def despeckle_option() -> Any:
+    """``despeckle``: the last step on segmented exemplars, declared once for every method."""
+    return option(True, "segmented exemplars: a voxel that no face neighbour shares its phase with takes the "
+                  "phase most of them have, at the end", group="method", check=Flag())
+
+
 def neighborhood_option(default: int) -> Any:
     """``neighborhood``: the window's side, declared once for every method (each its own default)."""
     return option(default, "odd side of the square window in each view", group="method", check=Int(3, 31, odd=True),

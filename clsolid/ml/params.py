@@ -14,6 +14,7 @@ from ..core.options import (
     Int,
     Real,
     Reals,
+    despeckle_option,
     documented,
     levels_option,
     neighborhood_option,
@@ -161,8 +162,9 @@ class MLParams:
     scales: int = scales_option()
     pyramid: str = option("binomial", "coarser exemplars: [1 2 1]/4 low-pass then 2:1 decimation, or plain "
                           "decimation (the thesis)", group=_TUNE, check=Choice(PYRAMIDS), advanced=True)
-    views: int = views_option()
+    views: int | str = views_option()
     levels: int | None = levels_option()
+    despeckle: bool = despeckle_option()
     heuristic: str = option("h2-product", "how the views' LCPDFs combine: " + ", ".join(HEURISTICS)
                             + ", or a thesis/paper tag", group=_ML, check=_Heuristic(), metavar="NAME")
     xi: float = option(-3.0, "cooling parameter xi < 0 of the per-voxel temperatures", group=_TUNE,
@@ -375,6 +377,7 @@ class MLParams:
         other keys are ignored. Keys a record predates take the value it ran with, not today's default."""
         kept = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
         kept.setdefault("parent_weight", 0.0)  # before parent terms there were none
+        kept.setdefault("despeckle", False)  # nor the last step on phases
         if "shared_weight" in kept:  # weighed the shared line alone before the profiles
             kept.setdefault("shared_profile", "line")
         if kept.get("prune_projected"):

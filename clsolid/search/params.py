@@ -10,6 +10,7 @@ from ..core.options import (
     Flag,
     Int,
     Real,
+    despeckle_option,
     documented,
     levels_option,
     neighborhood_option,
@@ -82,8 +83,9 @@ class SearchParams:
     scales: int = scales_option()
     iterations: int = option(10, "passes over every voxel at each level", group=_SEARCH, check=Int(1, 1000),
                              metavar="N")
-    views: int = views_option()
+    views: int | str = views_option()
     levels: int | None = levels_option()
+    despeckle: bool = despeckle_option()
     inner: int = option(4, "wl: most searches per voxel and pass, the centre included after the first", group=_TUNE,
                         check=Int(1, 100), advanced=True)
     parent: bool = option(True, "match the coarser level's 3 x 3 square too (a multi-resolution neighbourhood)",
@@ -236,8 +238,11 @@ class SearchParams:
 
     @classmethod
     def from_dict(cls, d: dict) -> "SearchParams":
-        """The parameters recorded by :meth:`to_dict` (e.g. ``SynthesisResult.params``); other keys are ignored."""
-        return cls(**{k: d[k] for k in cls.__dataclass_fields__ if k in d})
+        """The parameters recorded by :meth:`to_dict` (e.g. ``SynthesisResult.params``); other keys are ignored.
+        Keys a record predates take the value it ran with, not today's default."""
+        kept = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
+        kept.setdefault("despeckle", False)  # before the last step on phases there was none
+        return cls(**kept)
 
     def to_dict(self) -> dict:
         return asdict(self)
