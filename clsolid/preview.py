@@ -12,6 +12,7 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 from .errors import InputError
+from .core.files import replaced_atomically
 from .core.views import DEPTH_AXIS
 from .volumeio import PathLike, _as_path, _check_volume, _suffix
 
@@ -324,7 +325,8 @@ def save_preview(path: PathLike, exemplar: np.ndarray | dict[str, np.ndarray], v
     _suffix(p, "path", (".png",))
     preview = render_preview(exemplar, volume, depths=depths, constrained=constrained)
     p.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(preview.image).save(p, format="PNG")
+    with replaced_atomically(p) as tmp:  # a failed write leaves no partial PNG
+        Image.fromarray(preview.image).save(tmp, format="PNG")
     return p
 
 
@@ -361,5 +363,6 @@ def save_site_map(path: PathLike, use: np.ndarray) -> pathlib.Path:
     _suffix(p, "path", (".png",))
     image = render_site_map(use)
     p.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(image).save(p, format="PNG")
+    with replaced_atomically(p) as tmp:
+        Image.fromarray(image).save(tmp, format="PNG")
     return p

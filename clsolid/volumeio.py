@@ -3,7 +3,7 @@
 Volumes are ``(Z, Y, X)`` arrays. TIFF output is an ImageJ hyperstack so that Fiji
 opens it as a z-stack with the right voxel size, or, named ``.ome.tif``, an OME-TIFF (a
 BigTIFF above 4 GiB, which every reader reads whole); ``.npy`` keeps the bare array. All
-are written a plane at a time.
+are written a plane at a time, to a temporary file renamed into place when complete.
 Label volumes (integer grey-level indices) are narrowed to ``uint8``/``uint16``
 because those, with ``float32``, are the only sample types ImageJ understands.
 """
@@ -23,6 +23,7 @@ import numpy as np
 import tifffile
 from PIL import Image
 
+from .core.files import replaced_atomically
 from .errors import InputError, LargeTiffWarning
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -467,7 +468,9 @@ def save_volume(
     ----------
     path : str or os.PathLike
         Output file. The extension (any case) picks the format. Parent
-        directories are created; an existing file is overwritten.
+        directories are created; an existing file is replaced. The file is written under
+        a temporary name in its folder and renamed when complete: a write that fails
+        (a full disk) leaves what was at *path* before, never part of the volume.
     volume : numpy.ndarray
         3D array ``(Z, Y, X)`` of integers, floats or bools.
     voxel_size : float or tuple of 3 floats, optional
@@ -489,6 +492,8 @@ def save_volume(
     InputError
         Unsupported extension, bad ``volume``, ``voxel_size``, ``unit`` or
         ``metadata``, or integer values that fit neither uint8 nor uint16 (TIFF).
+    OSError
+        The file could not be written (its temporary file is removed).
 
     Notes
     -----
@@ -522,10 +527,15 @@ def save_volume(
     p.parent.mkdir(parents=True, exist_ok=True)
     if suffix == ".npy":
         narrowed = vol.dtype if vol.dtype.kind == "f" else _narrow_dtype(vol)
-        _write_npy(p, vol, vol.dtype if narrowed is None else narrowed)
+        with replaced_atomically(p) as tmp:
+            _write_npy(tmp, vol, vol.dtype if narrowed is None else narrowed)
         return p
-    write = _write_ome if _is_ome(p) else _write_imagej
-    write(p, vol, _tiff_dtype(vol), spacing, unit, meta_json)
+    dtype = _tiff_dtype(vol)
+    with replaced_atomically(p) as tmp:
+        if _is_ome(p):
+            _write_ome(tmp, vol, dtype, spacing, unit, meta_json)
+        else:
+            _write_imagej(tmp, vol, dtype, spacing, unit, meta_json, shown=p)
     return p
 
 
@@ -559,9 +569,9 @@ def _write_ome(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spacing:
 
 
 def _write_imagej(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spacing: tuple[float, float, float] | None,
-                  unit: str, meta_json: str | None) -> None:
+                  unit: str, meta_json: str | None, shown: pathlib.Path | None = None) -> None:
     """Write an ImageJ ZYX hyperstack of *dtype* samples, with optional calibration and
-    metadata, a plane at a time."""
+    metadata, a plane at a time; a warning names the file *shown* (default *path*)."""
     props = {_PROP_AXES: "ZYX"}
     if meta_json is not None:
         props[_PROP_METADATA] = meta_json
@@ -579,7 +589,7 @@ def _write_imagej(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spaci
     for w in caught:  # tifffile's own note on the large-file form says nothing a user can act on
         if "truncating ImageJ file" in str(w.message):
             warnings.warn(LargeTiffWarning(
-                f"{path}: {volume.size * dtype.itemsize / 2**30:.1f} GiB of samples, above the 4 GiB of a classic "
+                f"{shown or path}: {volume.size * dtype.itemsize / 2**30:.1f} GiB of samples, above the 4 GiB of a classic "
                 "TIFF, written in ImageJ's large-file form (one directory, the planes stored contiguously): "
                 "ImageJ/Fiji, tifffile and clsolid read it whole, other TIFF readers only its first plane; save "
                 "as .npy for those, or .ome.tif (an OME BigTIFF, which they read whole)"), stacklevel=3)

@@ -129,3 +129,54 @@ def tool():
         return module
 
     return load
+
+
+@pytest.fixture
+def full_disk(monkeypatch):
+    """``full_disk(folder, room, name="")``: from then on, the files opened for writing in
+    *folder* whose names hold *name* take *room* bytes in all; a write past that fails with
+    ``ENOSPC``, as on a full disk, after writing what fits. Every ``open`` (the built-in,
+    ``io.open``: what tifffile, Pillow, NumPy and pathlib call) goes through it; each call
+    fills one more folder."""
+    import builtins
+    import errno
+    import io
+
+    real_open = io.open
+    full: list[tuple[Path, str, list[int]]] = []  # folder, name, bytes left
+
+    def room_left(file, mode: str) -> list[int] | None:
+        if not isinstance(file, (str, os.PathLike)) or not any(c in mode for c in "wax+"):
+            return None
+        target = Path(file)
+        return next((left for folder, name, left in reversed(full)  # the latest call's rule
+                     if name in target.name and target.resolve().parent == folder), None)
+
+    def full_open(file, mode="r", buffering=-1, encoding=None, errors=None, newline=None, closefd=True,
+                  opener=None):
+        left = room_left(file, mode)
+        if left is None:
+            return real_open(file, mode, buffering, encoding, errors, newline, closefd, opener)
+
+        class FullFile(io.FileIO):
+            def write(self, data):
+                data = memoryview(data).cast("B")
+                done = super().write(data[:left[0]]) if left[0] else 0
+                left[0] -= done
+                if done < len(data):
+                    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), self.name)
+                return done
+
+            def fileno(self):  # none to give: NumPy and tifffile then write through write(), not past it
+                raise io.UnsupportedOperation("fileno")
+
+        raw = FullFile(file, mode.replace("b", "").replace("t", ""))
+        buffered = io.BufferedRandom(raw) if "+" in mode else io.BufferedWriter(raw)
+        return buffered if "b" in mode else io.TextIOWrapper(buffered, encoding or "utf-8", errors, newline)
+
+    def fill(folder, room: int, name: str = "") -> None:
+        full.append((Path(folder).resolve(), name, [room]))
+        monkeypatch.setattr(builtins, "open", full_open)
+        monkeypatch.setattr(io, "open", full_open)
+
+    return fill

@@ -62,6 +62,18 @@ def test_saved_png_is_the_rendered_image(tmp_path):
         np.testing.assert_array_equal(np.asarray(img), render_preview(ex, vol).image)
 
 
+def test_a_preview_that_fills_the_disk_leaves_what_was_there(tmp_path, full_disk):
+    """Out of space partway: the PNG that was there stays whole, and no partial file is left."""
+    rng = np.random.default_rng(1)
+    ex, vol = rng.random((16, 16)), rng.random((12, 12, 12))
+    path = save_preview(tmp_path / "p.png", ex, vol)
+    before = path.read_bytes()
+    full_disk(tmp_path, len(before) // 2)
+    with pytest.raises(OSError, match="No space left"):
+        save_preview(path, ex, vol[::-1])
+    assert sorted(tmp_path.iterdir()) == [path] and path.read_bytes() == before
+
+
 def test_preview_slices_avoid_the_inserted_slices():
     params = MLParams(insert_slices=4, views=2)  # 4 +in slices per constrained view, 3 scales
     shape = (64, 48, 64)

@@ -395,3 +395,27 @@ def test_non_ascii_unit_is_written_as_imagej_escape(tmp_path, labels):
 def test_ome_default_unit_is_micrometres(tmp_path):
     path = _image(tmp_path / "o.ome.tif", ome=True, metadata={"axes": "YX", "PhysicalSizeX": 0.5})
     assert image_pixel_size(path) == ((pytest.approx(0.5), pytest.approx(0.5)), "\u00b5m")
+
+
+@pytest.mark.parametrize("name", ["v.tif", "v.ome.tif", "v.npy"])
+def test_a_write_that_fills_the_disk_leaves_what_was_there(tmp_path, full_disk, name):
+    """Out of space halfway through the planes: the error is the system's (ENOSPC), the file
+    that was at the path is whole and unchanged (or, where none was, there is none), and no
+    partial file is left beside it."""
+    import errno
+
+    path = tmp_path / name
+    old = np.zeros((4, 16, 16), np.float32)
+    save_volume(path, old, voxel_size=0.5)
+    before = path.read_bytes()
+    new = np.random.default_rng(0).random((8, 32, 32)).astype(np.float32)
+    full_disk(tmp_path, new.nbytes // 2)
+    with pytest.raises(OSError) as caught:
+        save_volume(path, new, voxel_size=0.5)
+    assert caught.value.errno == errno.ENOSPC
+    assert sorted(tmp_path.iterdir()) == [path] and path.read_bytes() == before
+    path.unlink()
+    full_disk(tmp_path, new.nbytes // 2)  # room again
+    with pytest.raises(OSError):
+        save_volume(path, new, voxel_size=0.5)
+    assert not list(tmp_path.iterdir())  # no file was there: none is

@@ -37,6 +37,7 @@ from ..core.options import (
     refuse_unknown,
     validate,
 )
+from ..core.files import replaced_atomically, write_text_atomically
 from ..core.views import VIEW_ORDER
 from ..errors import InputError, OutputError
 from ..ml.backends import BackendOptions
@@ -358,11 +359,13 @@ def _voxel_size(command: Any) -> tuple[Any, str | None, str | None]:
 
 
 def _rescue(volume: Any, seed: int) -> Path:
-    """Save a volume whose output failed late (a full disk) where it can go: the temporary folder."""
+    """Save a volume whose output failed late (a full disk) where it can go: the temporary folder
+    (whole or not at all, as every output)."""
     import numpy as np
 
     path = Path(tempfile.gettempdir()) / f"clsolid-rescued-seed{seed}-{os.getpid()}.npy"
-    np.save(path, volume)
+    with replaced_atomically(path) as tmp, open(tmp, "wb") as f:  # a file object: np.save adds no suffix
+        np.save(f, volume)
     return path
 
 
@@ -421,8 +424,14 @@ def run_synth(given: dict[str, Any]) -> int:
         written = save_volume(output, volume, voxel_size=voxel_size, unit=unit or "um",
                               metadata={"seed": result.seed, "written": kind, "levels": int(result.level_values.size)})
     except OSError as exc:  # checked writable before the run: a full disk, a vanished mount
+        try:
+            rescued = _rescue(volume, result.seed)
+        except OSError as again:
+            raise OutputError(f"--output {output} could not be written ({exc}), nor could the volume be saved in "
+                              f"{tempfile.gettempdir()} ({again}); free some space and run again (the same --seed "
+                              "gives the same volume)") from exc
         raise OutputError(f"--output {output} could not be written ({exc}); the volume is saved in "
-                          f"{_rescue(volume, result.seed)}") from exc
+                          f"{rescued}") from exc
     try:
         others = _write_the_rest(cmd, settings, result, written, voxel_size, unit, voxel_from, records,
                                  save_preview, save_site_map, slice_plan, preview_depths)
@@ -463,7 +472,7 @@ def _write_the_rest(cmd, settings, result, written, voxel_size, unit, voxel_from
             "voxel_size": voxel_size, "unit": unit, "voxel_size_from": voxel_from,
             "versions": versions(), "timings": result.timings,
             "command": " ".join(sys.argv), "written_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
-    sidecar.write_text(json.dumps(meta, indent=2, default=float))
+    write_text_atomically(sidecar, json.dumps(meta, indent=2, default=float))
     others = [str(sidecar)]
     if cmd.preview is not None:
         plan = slice_plan(result.params)  # away from the +in (or anchor) slices, which show the exemplar
@@ -477,11 +486,12 @@ def _write_the_rest(cmd, settings, result, written, voxel_size, unit, voxel_from
     if cmd.source_map is not None:
         import numpy as np
 
-        np.save(cmd.source_map, result.source)
+        with replaced_atomically(cmd.source_map) as tmp, open(tmp, "wb") as f:
+            np.save(f, result.source)
         others.append(str(cmd.source_map))
     if cmd.track is not None:
-        Path(cmd.track).write_text(json.dumps({"exemplar": meta["exemplar"], "seed": result.seed,
-                                               "records": records}, indent=2))
+        write_text_atomically(cmd.track, json.dumps({"exemplar": meta["exemplar"], "seed": result.seed,
+                                                     "records": records}, indent=2))
         others.append(str(cmd.track))
     return others
 

@@ -267,3 +267,66 @@ def test_volume_is_rescued_when_the_output_fails_late(tmp_path, capsys, monkeypa
     assert "No space left on device" in err and "the volume is saved in" in err
     rescued = list(tmp_path.glob("clsolid-rescued-seed3-*.npy"))
     assert len(rescued) == 1 and np.load(rescued[0]).shape == (8, 10, 12)
+
+
+# -- a full disk while writing --------------------------------------------------------------
+
+
+def _run_beside_a_full_disk(tmp_path, capsys, monkeypatch, full_disk, fills, *flags) -> tuple[int, str, np.ndarray]:
+    """The exit status and stderr of ``synth`` into ``tmp_path/out``, where *fills* (folder
+    name -> (room, file name)) makes files run out of space; and the uninterrupted volume."""
+    assert main(["synth", "brick", "-o", str(tmp_path / "whole.npy"), *FAST, "-q"]) == 0
+    for folder in ("out", "tmp"):
+        (tmp_path / folder).mkdir()
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path / "tmp"))
+    for folder, (room, name) in fills.items():
+        full_disk(tmp_path / folder, room, name)
+    capsys.readouterr()
+    code = main(["synth", "brick", *FAST, "-q", *flags])
+    return code, capsys.readouterr().err, np.load(tmp_path / "whole.npy")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["v.tif", "v.ome.tif", "v.npy"])
+def test_a_full_disk_midway_through_the_volume_leaves_no_output_and_rescues_it(tmp_path, capsys, monkeypatch,
+                                                                              full_disk, device, name):
+    """Out of space halfway through the volume's planes: no file at -o (nor a partial one
+    beside it), exit status 7, and the message names the file the volume was saved in, which
+    holds the volume."""
+    import re
+    from pathlib import Path
+
+    out = tmp_path / "out" / name
+    code, err, whole = _run_beside_a_full_disk(tmp_path, capsys, monkeypatch, full_disk,
+                                               {"out": (8 * 10 * 12 * 4 // 2, name)}, "-o", str(out))
+    assert code == EXIT_OUTPUT and "No space left on device" in err
+    rescued = Path(re.search(r"the volume is saved in (\S+\.npy)", err).group(1))
+    assert rescued.parent == tmp_path / "tmp" and np.array_equal(np.load(rescued), whole)
+    assert not list(out.parent.iterdir()) and list((tmp_path / "tmp").iterdir()) == [rescued]
+
+
+@pytest.mark.slow
+def test_a_full_disk_where_the_volume_would_be_rescued_too_says_so(tmp_path, capsys, monkeypatch, full_disk,
+                                                                    device):
+    """The output and the temporary folder both full: exit status 7 (not a crash), a message
+    naming both failures and the way back, and no partial file in either folder."""
+    code, err, _ = _run_beside_a_full_disk(tmp_path, capsys, monkeypatch, full_disk,
+                                           {"out": (100, "v.npy"), "tmp": (100, "")}, "-o",
+                                           str(tmp_path / "out" / "v.npy"))
+    assert code == EXIT_OUTPUT and "nor could the volume be saved in" in err and "--seed" in err
+    assert not list((tmp_path / "out").iterdir()) and not list((tmp_path / "tmp").iterdir())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name, kept", [("v.json", ["v.tif"]), ("p.png", ["v.json", "v.tif"])])
+def test_a_full_disk_while_writing_the_sidecar_or_preview_keeps_the_volume(tmp_path, capsys, monkeypatch, full_disk,
+                                                                           device, name, kept):
+    """The volume written, then no room for its sidecar (or the preview, written after it):
+    exit status 7, the message says where the volume is, which holds it, and the file that
+    failed is not there, not even in part."""
+    out = tmp_path / "out" / "v.tif"
+    code, err, whole = _run_beside_a_full_disk(tmp_path, capsys, monkeypatch, full_disk, {"out": (0, name)}, "-o",
+                                               str(out), "--preview", str(tmp_path / "out" / "p.png"))
+    assert code == EXIT_OUTPUT and f"the volume is in {out}" in err and "No space left on device" in err
+    assert np.array_equal(load_volume(out)[0], whole.astype(np.float32))  # ImageJ's float samples
+    assert sorted(p.name for p in out.parent.iterdir()) == kept

@@ -152,3 +152,44 @@ def test_bench_scale_compares_the_workers_run(capsys, device, client, tool):
     out = capsys.readouterr().out
     assert "the tiles on 2 Dask workers" in out and "| porous50 | 64² → 8³ | pruned |" in out
     assert out.count("| yes |") == 2  # tiled is one piece, and the workers' run is the tiled one
+
+
+@pytest.mark.slow
+def test_a_run_that_loses_a_worker_gives_the_uninterrupted_volume(device):
+    """A worker process killed (``os._exit``) at a random moment of a sweep, as it runs tile
+    tasks: Dask runs them again on the other worker (or the one its nanny starts), and the
+    volume is the uninterrupted run's. Its own cluster: the module's keeps its workers."""
+    import os
+    import threading
+    import time
+
+    kw = dict(neighborhood=5, scales=2, rng=3, sweeps=1, device=device)
+    gravel = builtin_exemplar("gravel", size=16)
+    whole = clsolid.synthesize(gravel, SHAPE, **kw)
+    # After the first scale: within the second's sweep, whose sets' tasks take seconds in all.
+    delay = float(np.random.default_rng(48).uniform(0.5, 3.0))
+    done, killed = threading.Event(), []
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0") as cluster, distributed.Client(cluster) as client:
+        victim = sorted(client.scheduler_info()["workers"])[0]
+
+        async def die():  # client.run waits for nothing only from a coroutine function
+            os._exit(1)
+
+        def kill():
+            deadline = time.monotonic() + 10
+            while not client.processing([victim])[victim] and time.monotonic() < deadline and not done.is_set():
+                time.sleep(0.005)  # between two sets: wait for the next one's tasks
+            killed.append((not done.is_set(), len(client.processing([victim])[victim])))
+            client.run(die, workers=[victim], wait=False)
+
+        def kill_later(info):
+            if info.scale == 1:
+                threading.Timer(delay, kill).start()
+
+        result = clsolid.synthesize(gravel, SHAPE, backend={"tile": 12, "client": client}, progress=kill_later, **kw)
+        done.set()
+        [(going, tasks)] = killed
+        assert going and tasks > 0  # killed while the run went on, with tasks of it
+        assert victim not in client.scheduler_info()["workers"]  # its process is gone
+    np.testing.assert_array_equal(result, whole)
