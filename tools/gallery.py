@@ -101,16 +101,16 @@ def copy_chance(exemplar: np.ndarray, side: int) -> float:
 
 
 def isolated(res: Any, categorical: bool) -> dict[str, float]:
-    """The share of isolated voxels of a result's volume (labels none of the 6 face neighbours
-    shares; grey: unlike every one by more than the exemplar's steps,
+    """The share of isolated voxels of a result's volume (labels none of the 6 face neighbours,
+    across the block's faces too: it tiles, shares; grey: unlike every one by more than the exemplar's steps,
     :func:`clsolid.metrics.isolated_contrast_fraction`), the exemplar's share of isolated pixels
     (4 neighbours), and their ratio. The exemplar counts at least one pixel: a clean one has none,
     and a ratio to 0 would say nothing of how speckled the volume is."""
     if categorical:
         vol, ex = level_indices(res)
-        in_volume, in_exemplar = metrics.isolated_fraction(vol), metrics.isolated_fraction(ex)
+        in_volume, in_exemplar = metrics.isolated_fraction(vol, periodic=True), metrics.isolated_fraction(ex)
     else:  # the exemplar as the engine saw it (level means), like the volume
-        in_volume = metrics.isolated_contrast_fraction(res.volume, res.exemplar)
+        in_volume = metrics.isolated_contrast_fraction(res.volume, res.exemplar, periodic=True)
         in_exemplar = metrics.isolated_contrast_fraction(res.exemplar, res.exemplar)
     return {"volume": in_volume, "exemplar": in_exemplar,
             "ratio": in_volume / max(in_exemplar, 1.0 / np.size(res.exemplar))}

@@ -3,9 +3,10 @@
 A faithful volume has few of them: a label no neighbour shares, or a grey level further
 from all its neighbours than the exemplar's own steps between neighbours, is noise that
 slice statistics average away. Neighbours are the face neighbours inside the array (6 in a
-volume, 4 in an image; fewer on its faces, edges and corners); nothing wraps around. A
-voxel with no neighbour inside the array (a 1-voxel array) is never isolated, since
-nothing says it is unlike its surroundings.
+volume, 4 in an image; fewer on its faces, edges and corners); nothing wraps around, unless
+the volume is said to be periodic (clsolid's volumes tile: a voxel on a face has its
+neighbour across the opposite face). A voxel with no neighbour inside the array (a 1-voxel
+array) is never isolated, since nothing says it is unlike its surroundings.
 """
 
 from __future__ import annotations
@@ -73,13 +74,26 @@ def contrast_threshold(exemplar: Any, *, quantile: float = DEFAULT_QUANTILE) -> 
     return float(np.quantile(np.concatenate(steps), quantile))
 
 
-def isolated_fraction(labels: Any) -> float:
+def _wrapped(mask_of: Any, arr: np.ndarray, periodic: bool, *args: Any) -> np.ndarray:
+    """``mask_of(arr, axes, *args)``, with every axis wrapping around if *periodic* (the array
+    padded by its opposite faces, the mask cut back)."""
+    axes = tuple(range(arr.ndim))
+    if not periodic:
+        return mask_of(arr, axes, *args)
+    inner = tuple(slice(1, -1) for _ in axes)
+    return mask_of(np.pad(arr, 1, mode="wrap"), axes, *args)[inner]
+
+
+def isolated_fraction(labels: Any, *, periodic: bool = False) -> float:
     """Fraction of voxels (pixels) whose label none of their face neighbours shares.
 
     Parameters
     ----------
     labels : array_like, (Z, Y, X) or (rows, cols)
         A label volume (6 face neighbours) or image (4); any real dtype, compared exactly.
+    periodic : bool, default False
+        Whether the array wraps around (clsolid's volumes do): then every voxel has all its
+        face neighbours.
 
     Returns
     -------
@@ -89,10 +103,11 @@ def isolated_fraction(labels: Any) -> float:
         another label inside a block.
     """
     arr = as_image_or_volume(labels, "labels")
-    return float(np.mean(_isolated_labels(arr, tuple(range(arr.ndim)))))
+    return float(np.mean(_wrapped(_isolated_labels, arr, periodic)))
 
 
-def isolated_contrast_fraction(values: Any, exemplar: Any, *, quantile: float = DEFAULT_QUANTILE) -> float:
+def isolated_contrast_fraction(values: Any, exemplar: Any, *, quantile: float = DEFAULT_QUANTILE,
+                               periodic: bool = False) -> float:
     """Fraction of voxels of a grey volume or image unlike every face neighbour.
 
     A voxel counts when its absolute difference from each of its face neighbours
@@ -110,6 +125,8 @@ def isolated_contrast_fraction(values: Any, exemplar: Any, *, quantile: float = 
         The reference whose neighbour differences set the threshold.
     quantile : float, default 0.99
         In (0, 1]; larger is stricter.
+    periodic : bool, default False
+        Whether *values* wraps around (as :func:`isolated_fraction`).
 
     Returns
     -------
@@ -119,7 +136,7 @@ def isolated_contrast_fraction(values: Any, exemplar: Any, *, quantile: float = 
     """
     arr = as_image_or_volume(values, "values")
     threshold = contrast_threshold(exemplar, quantile=quantile)
-    return float(np.mean(_isolated_contrast(arr, tuple(range(arr.ndim)), threshold)))
+    return float(np.mean(_wrapped(_isolated_contrast, arr, periodic, threshold)))
 
 
 def isolated_fraction_by_slice(volume: Any, view: str, *, exemplar: Any = None,

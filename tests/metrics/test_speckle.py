@@ -142,3 +142,15 @@ def test_bad_arguments_are_refused_with_their_name():
         isolated_fraction(np.array([[0.0, np.nan]]))
     with pytest.raises(InputError, match="view='side'"):
         isolated_fraction_by_slice(np.zeros((3, 3, 3)), "side")
+
+
+def test_a_periodic_volume_has_its_neighbours_across_the_faces():
+    from clsolid.metrics import isolated_contrast_fraction, isolated_fraction
+
+    labels = np.zeros((4, 5, 6), int)
+    labels[0, 2, 2] = labels[3, 2, 2] = 1  # a pair across the z faces: alike only if the block wraps
+    assert isolated_fraction(labels) == pytest.approx(2 / labels.size)
+    assert isolated_fraction(labels, periodic=True) == 0.0
+    grey = labels * 100.0
+    assert isolated_contrast_fraction(grey, grey[0], periodic=True) == 0.0
+    assert isolated_contrast_fraction(grey, np.arange(16.0).reshape(4, 4)) == pytest.approx(2 / labels.size)
