@@ -594,8 +594,9 @@ def _write_ome(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spacing:
     if meta_json is not None:
         meta["Description"] = meta_json
     big = volume.size * dtype.itemsize > _CLASSIC_TIFF_BYTES
+    # minisblack: else tifffile takes a last axis of 3 or 4 voxels for RGB(A) samples
     tifffile.imwrite(path, _planes(volume, dtype), shape=volume.shape, dtype=dtype, ome=True, bigtiff=big,
-                     metadata=meta)
+                     photometric="minisblack", metadata=meta)
 
 
 def _write_imagej(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spacing: tuple[float, float, float] | None,

@@ -168,6 +168,14 @@ def test_ome_tif_one_plane_stays_3d_and_other_ome_images_2d(tmp_path, labels):
     assert load_volume(tmp_path / "micrograph.ome.tif")[0].shape == labels.shape[1:]
 
 
+@pytest.mark.parametrize("shape", [(5, 6, 3), (2, 3, 4), (1, 6, 4)])
+def test_ome_tif_with_three_or_four_columns_is_a_volume_not_colour(tmp_path, shape):
+    # tifffile took the last axis for RGB(A) samples: "axes do not match stored shape", a file half written
+    volume = np.arange(np.prod(shape), dtype=np.uint8).reshape(shape)
+    data, _ = load_volume(save_volume(tmp_path / "v.ome.tif", volume))
+    np.testing.assert_array_equal(data, volume)
+
+
 def test_ome_tif_refuses_a_unit_ome_does_not_know_before_writing(tmp_path, labels):
     with pytest.raises(InputError, match="OME-XML's length units"):
         save_volume(tmp_path / "v.ome.tif", labels, voxel_size=1.0, unit="furlong")
