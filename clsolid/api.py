@@ -49,7 +49,7 @@ def method_params(method: str, params: MLParams | SearchParams | None = None, **
     -------
     MLParams or SearchParams
     """
-    if method not in METHODS:
+    if not isinstance(method, str) or method not in METHODS:
         raise InputError(f"method={method!r} is not available; use one of {tuple(METHODS)}")
     cls = METHODS[method]
     valid = tuple(n for n in names(cls) if n != "method")
@@ -93,6 +93,11 @@ def inserted_slices(params: dict, shape: tuple[int, int, int]) -> dict[str, np.n
 def _check_output(output: Any) -> None:
     if output not in OUTPUTS:
         raise InputError(f"output={output!r} must be one of {', '.join(map(repr, OUTPUTS))}")
+
+
+def _check_progress(progress: Any) -> None:
+    if progress is not None and not callable(progress):
+        raise InputError(f"progress={progress!r} must be a function taking a SweepInfo, or None")
 
 
 def _load(exemplar: Any, levels: int | None, rng: Any):
@@ -243,6 +248,7 @@ def synthesize(
     """
     run_params = method_params(method, params, **options)
     _check_output(output)
+    _check_progress(progress)
     shape = check_shape(shape)
     if not isinstance(site_map, bool):
         raise InputError(f"site_map={site_map!r} must be True or False")
@@ -342,6 +348,7 @@ def resume(checkpoint, *, device: Any = None, backend: BackendOptions | dict | N
     from .ml.model import scale_shape
 
     _check_output(output)
+    _check_progress(progress)
     run = backend_options(backend)
     if run.checkpoint is not None:
         raise InputError(f"checkpoint={run.checkpoint!r}: a resumed run goes on checkpointing in its own folder "

@@ -18,6 +18,7 @@ Conventions
 
 from __future__ import annotations
 
+import math
 import numbers
 from dataclasses import dataclass, field
 from statistics import NormalDist
@@ -55,8 +56,8 @@ def _check_shape(shape: Any, name: str = "shape") -> tuple[int, int, int]:
                               for s in sides):
         raise InputError(f"{name}={shape!r} must be a side or a (Z, Y, X) triple of integers >= {MIN_SIDE}")
     sides = tuple(int(s) for s in sides)
-    if np.prod(sides, dtype=np.int64) > MAX_VOXELS:
-        raise InputError(f"{name}={shape!r} has {np.prod(sides, dtype=np.int64)} voxels, more than "
+    if math.prod(sides) > MAX_VOXELS:  # Python ints: a huge shape must not wrap
+        raise InputError(f"{name}={shape!r} has {math.prod(sides)} voxels, more than "
                          f"{MAX_VOXELS} (512^3); generate a smaller volume")
     return sides
 

@@ -15,7 +15,10 @@ import math
 import os
 import logging
 import pathlib
+import struct
+import tokenize
 import warnings
+import zlib
 from numbers import Real
 from typing import Any, Iterator, Union
 
@@ -88,6 +91,9 @@ def _read_png(path: pathlib.Path, param: str) -> np.ndarray:
                 # Palette indices are not grey values: expand, then collapse a grey palette.
                 img = img.convert("RGBA" if "transparency" in img.info else "RGB")
             data = np.asarray(img)
+    except Image.DecompressionBombError as exc:  # a damaged header can declare billions of pixels
+        raise InputError(f"{param} {str(path)!r} declares more pixels than Pillow opens ({exc}); check that the "
+                         "file is not damaged, or save a large image as .tif or .npy") from exc
     except (OSError, ValueError) as exc:
         raise InputError(
             f"{param} {str(path)!r} could not be read as a PNG image ({exc}); "
@@ -242,8 +248,14 @@ def image_pixel_size(path: PathLike) -> tuple[tuple[float, float], str] | None:
         try:
             with tifffile.TiffFile(p) as tif:
                 return _tiff_pixel_size(tif)
-        except (OSError, ValueError, tifffile.TiffFileError):
+        except _TIFF_DAMAGE:
             return None
+
+
+#: What tifffile raises on a damaged file: besides its own errors, whatever its parser trips over
+#: (struct.error, KeyError, IndexError, TypeError, RuntimeError, zlib's or another codec's error).
+_TIFF_DAMAGE = (OSError, ValueError, tifffile.TiffFileError, struct.error, zlib.error, LookupError, TypeError,
+                RuntimeError, AssertionError, ArithmeticError)
 
 
 class _TiffComplaints(logging.Handler):
@@ -279,7 +291,10 @@ def _read_tiff(path: pathlib.Path, param: str) -> tuple[np.ndarray, dict]:
                 if tif.is_ome and not tif.is_imagej:
                     info.update(_ome_info(tif.ome_metadata))
                 ome_stack = info.pop("ome_stack", False)
-        except (OSError, ValueError, tifffile.TiffFileError) as exc:
+        except MemoryError as exc:  # a damaged header can declare terabytes
+            raise InputError(f"{param} {str(path)!r} declares an image larger than the memory free ({exc}); "
+                             "check that the file is not damaged, or use a smaller image") from exc
+        except _TIFF_DAMAGE as exc:
             raise InputError(
                 f"{param} {str(path)!r} could not be read as a TIFF file ({exc}); "
                 "check that the file is a valid TIFF"
@@ -293,15 +308,40 @@ def _read_tiff(path: pathlib.Path, param: str) -> tuple[np.ndarray, dict]:
     return data, info
 
 
+def _npy_data_bytes(path: pathlib.Path) -> tuple[int, int, tuple, np.dtype] | None:
+    """``(declared, held, shape, dtype)``: the data bytes a ``.npy`` file's header declares
+    and those the file holds; None for what is not a ``.npy`` header (:func:`numpy.load` says why)."""
+    with open(path, "rb") as fh:
+        try:
+            version = np.lib.format.read_magic(fh)
+        except ValueError:
+            return None
+        if version not in ((1, 0), (2, 0), (3, 0)):
+            return None
+        # Version 3 differs from 2 only in its header's encoding (UTF-8 field names).
+        read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+        shape, _, dtype = read(fh)
+        held = os.fstat(fh.fileno()).st_size - fh.tell()
+    return math.prod(shape) * dtype.itemsize, held, shape, dtype
+
+
 def _read_npy(path: pathlib.Path, param: str) -> np.ndarray:
-    """Read a ``.npy`` file without unpickling (object arrays are refused)."""
+    """Read a ``.npy`` file without unpickling (object arrays are refused), checking first that
+    it holds the data its header declares: a damaged header must not make it allocate more."""
     try:
-        data = np.load(path, allow_pickle=False)
-    except (OSError, ValueError, EOFError) as exc:
+        sizes = _npy_data_bytes(path)
+        truncated = sizes is not None and sizes[0] > sizes[1]
+        data = None if truncated else np.load(path, allow_pickle=False)
+    # numpy's header parser lets a damaged header's SyntaxError and TokenError through
+    except (OSError, ValueError, EOFError, SyntaxError, tokenize.TokenError) as exc:
         raise InputError(
             f"{param} {str(path)!r} could not be read as a .npy array ({exc}); "
             "save it with numpy.save from a numeric array"
         ) from exc
+    if truncated:
+        declared, held, shape, dtype = sizes
+        raise InputError(f"{param} {str(path)!r} is damaged or truncated: its header declares a {shape} {dtype} "
+                         f"array ({declared} bytes) but it holds {held} bytes of data; save it again with numpy.save")
     if not isinstance(data, np.ndarray):  # np.load returns an NpzFile for .npz content
         raise InputError(f"{param} {str(path)!r} is not a single .npy array; save it with numpy.save")
     return data
@@ -564,8 +604,9 @@ def _write_ome(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spacing:
     if meta_json is not None:
         meta["Description"] = meta_json
     big = volume.size * dtype.itemsize > _CLASSIC_TIFF_BYTES
+    # minisblack: else tifffile takes a last axis of 3 or 4 voxels for RGB(A) samples
     tifffile.imwrite(path, _planes(volume, dtype), shape=volume.shape, dtype=dtype, ome=True, bigtiff=big,
-                     metadata=meta)
+                     photometric="minisblack", metadata=meta)
 
 
 def _write_imagej(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spacing: tuple[float, float, float] | None,

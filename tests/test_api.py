@@ -76,6 +76,7 @@ def test_bandwidth_is_a_fraction_of_silverman_per_scale(brick_labels):
     (np.arange(256.0).reshape(16, 16), (4, 4), "shape"),
     (np.arange(256.0).reshape(16, 16), (16, 16, True), "shape"),
     (np.arange(256.0).reshape(16, 16), (16, 16, 2.5), "shape"),
+    (np.arange(256.0).reshape(16, 16), "444", "shape"),  # int() reads each character: it grew 4x4x4
     ("no-such-texture", (4, 4, 4), "exemplar"),
 ])
 def test_bad_input_is_refused_clearly(exemplar, shape, word):
@@ -190,6 +191,23 @@ def test_progress_reports_every_sweep(device):
     last = seen[-1]
     assert last.scale == 2 and last.volume().shape == (8, 8, 8) and last.elapsed > 0
     assert [i.temperature for i in seen if i.scale == 2] == r.timings["scales"][1]["temperatures"]
+
+
+@pytest.mark.parametrize("method", ["ml", "kopf"])
+def test_a_progress_that_is_not_a_function_is_refused_before_the_run(method):
+    # it failed at the first sweep's report, with TypeError: 'int' object is not callable
+    with pytest.raises(InputError, match="progress=1 must be a function"):
+        clsolid.synthesize(np.arange(256.0).reshape(16, 16), (4, 4, 4), method=method, device="reference",
+                           progress=1, **SMALL)
+
+
+@pytest.mark.parametrize("option", [{"bandwidth_factor": 1e308}, {"bandwidth": 1e-308}])
+def test_a_bandwidth_the_kernels_cannot_hold_is_refused(device, option):
+    # 1 / (2 h^2) overflowed (OverflowError) or divided by zero (ZeroDivisionError) on building the scale
+    ex = np.arange(256.0).reshape(16, 16)
+    for dev in ("reference", device):
+        with pytest.raises(InputError, match=f"{next(iter(option))}=.* gives a Parzen bandwidth of"):
+            clsolid.synthesize(ex, (4, 4, 4), device=dev, rng=1, **SMALL, **option)
 
 
 def test_rng_generator_and_none():

@@ -128,6 +128,7 @@ def test_sections_are_the_central_views():
 @pytest.mark.parametrize("call, param", [
     (lambda: isotropic_field(4, seed=0), "shape"),
     (lambda: isotropic_field((8, 8), seed=0), "shape"),
+    (lambda: isotropic_field((2**22, 2**22, 2**22), seed=0), "shape"),  # 2^66 voxels, 0 in int64
     (lambda: isotropic_field(16, seed=-1), "seed"),
     (lambda: isotropic_field(16, seed=0, fractions=(0.5, 0.6)), "fractions"),
     (lambda: isotropic_field(16, seed=0, fractions=(1.0,)), "fractions"),

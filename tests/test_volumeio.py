@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import shutil
+import struct
 import tracemalloc
 import warnings
+import zlib
 
 import numpy as np
 import pytest
@@ -164,6 +166,14 @@ def test_ome_tif_one_plane_stays_3d_and_other_ome_images_2d(tmp_path, labels):
     assert data.shape == (1,) + labels.shape[1:] and info["voxel_size"] is None
     tifffile.imwrite(tmp_path / "micrograph.ome.tif", labels[0], ome=True)  # another program's 2D image
     assert load_volume(tmp_path / "micrograph.ome.tif")[0].shape == labels.shape[1:]
+
+
+@pytest.mark.parametrize("shape", [(5, 6, 3), (2, 3, 4), (1, 6, 4)])
+def test_ome_tif_with_three_or_four_columns_is_a_volume_not_colour(tmp_path, shape):
+    # tifffile took the last axis for RGB(A) samples: "axes do not match stored shape", a file half written
+    volume = np.arange(np.prod(shape), dtype=np.uint8).reshape(shape)
+    data, _ = load_volume(save_volume(tmp_path / "v.ome.tif", volume))
+    np.testing.assert_array_equal(data, volume)
 
 
 def test_ome_tif_refuses_a_unit_ome_does_not_know_before_writing(tmp_path, labels):
@@ -348,6 +358,67 @@ def test_load_pickled_npy_is_error(tmp_path):
     np.save(path, np.array([{"a": 1}], dtype=object), allow_pickle=True)
     with pytest.raises(InputError, match="path"):
         load_volume(path)
+
+
+def _npy_with_header(path, header: str, data: bytes = bytes(42)):
+    """A version 1.0 ``.npy`` file with this header text (padded as numpy pads it) and data."""
+    text = header.ljust(117) + "\n"
+    path.write_bytes(b"\x93NUMPY\x01\x00" + len(text).to_bytes(2, "little") + text.encode("latin1") + data)
+    return path
+
+
+@pytest.mark.parametrize("header, needle", [
+    # a header cut short inside its dict: numpy's parser let tokenize's TokenError through
+    ("{'descr': '|u1', 'fortran_order': False, 'shape': (1, 6, 7), \x00", "could not be read"),
+    # a damaged shape declaring 931 GiB: numpy tried to allocate it (MemoryError)
+    ("{'descr': '|u1', 'fortran_order': False, 'shape': (1000000000000,), }", "truncated"),
+])
+def test_load_npy_with_damaged_header_is_error(tmp_path, header, needle):
+    path = _npy_with_header(tmp_path / "damaged.npy", header)
+    with pytest.raises(InputError, match="path") as info:
+        load_volume(path)
+    assert needle in str(info.value)
+
+
+def _patched_tiff(path, shape, **fields):
+    """A uint8 TIFF of *shape* whose tags named in *fields* are overwritten with these 32-bit values
+    (a tag's value field, or ``"<tag>.count"`` its count)."""
+    tifffile.imwrite(path, np.zeros(shape, np.uint8))
+    data = bytearray(path.read_bytes())
+    with tifffile.TiffFile(path) as tif:
+        tags = tif.pages.first.tags
+        for name, value in fields.items():
+            tag, _, part = name.partition(".")
+            at = tags[tag].offset + 4 if part == "count" else tags[tag].valueoffset
+            data[at:at + 4] = int(value).to_bytes(4, "little")
+    path.write_bytes(bytes(data))
+    return path
+
+
+def test_load_damaged_tiffs_is_error(tmp_path):
+    (tmp_path / "cut.tif").write_bytes(b"II")  # tifffile's struct.error
+    with pytest.raises(InputError, match="could not be read as a TIFF"):
+        load_volume(tmp_path / "cut.tif")
+    # 2^31 x 2^31 pixels declared in a 70 kB file: tifffile tried to allocate 4 EiB (MemoryError)
+    huge = _patched_tiff(tmp_path / "huge.tif", (1, 70000), ImageWidth=2**31, ImageLength=2**31)
+    with pytest.raises(InputError, match="larger than the memory"):
+        load_volume(huge)
+
+
+def test_load_png_declaring_a_billion_pixels_is_error(tmp_path):
+    path = tmp_path / "bomb.png"
+    Image.fromarray(np.zeros((4, 5), np.uint8)).save(path)
+    data = path.read_bytes()
+    ihdr = struct.pack(">IIBBBBB", 1680603714, 8, 16, 4, 0, 0, 1)  # 13 Gpixels, with a valid checksum
+    path.write_bytes(data[:16] + ihdr + struct.pack(">I", zlib.crc32(b"IHDR" + ihdr)) + data[33:])
+    with pytest.raises(InputError, match="more pixels than Pillow opens"):  # was Pillow's DecompressionBombError
+        load_volume(path)
+
+
+def test_image_pixel_size_of_a_damaged_tiff_is_none(tmp_path):
+    # a ResolutionUnit of two values reads as a tuple, which int() refused (TypeError)
+    path = _patched_tiff(tmp_path / "unit.tif", (4, 5), **{"ResolutionUnit.count": 2})
+    assert image_pixel_size(path) is None
 
 
 def _image(path, **kwargs):

@@ -45,8 +45,13 @@ def sidecar_settings(path: Path) -> dict[str, Any]:
         raise InputError(f"--config {path} is not the sidecar of a clsolid synth run (no 'params' with a 'method')")
     if meta.get("exemplar") is None:
         raise InputError(f"--config {path} describes a resumed run; go on from its checkpoint with --resume")
+    missing = [f"'{k}'" for k in ("seed",) if k not in meta] + [f"params '{k}'" for k in ("shape",) if k not in params]
+    if meta.get("voxel_size_from") == "--voxel-size" and "voxel_size" not in meta:
+        missing.append("'voxel_size'")
+    if missing:
+        raise InputError(f"--config {path} lacks {', '.join(missing)}: not the whole sidecar of a clsolid synth run")
     method = params["method"]
-    if method not in METHODS:
+    if not isinstance(method, str) or method not in METHODS:
         raise InputError(f"--config {path}: method {method!r} is not available; use one of {tuple(METHODS)}")
     cls = METHODS[method]
     try:  # the parameters as the run took them (records older than an option read as they ran)

@@ -29,6 +29,7 @@ from ..core.options import (
     Choice,
     Flag,
     Int,
+    PathLike,
     add_arguments,
     declared,
     documented,
@@ -100,12 +101,12 @@ class Sizes(Check):
         return isinstance(value, (list, tuple)) and len(value) in (1, 3)
 
 
-def _path(what: str) -> Anything:
-    return Anything(what, Path)
+def _path(what: str) -> PathLike:
+    return PathLike(what, Path)
 
 
 _E, _O, _R, _V = "essentials", "output", "run", "views"
-_ANY_EXEMPLAR = Anything("a file or a built-in name")
+_ANY_EXEMPLAR = PathLike("a file or a built-in name")
 
 
 @documented
@@ -115,7 +116,7 @@ class SynthCommand:
     the back end's are their own classes')."""
 
     exemplar: str = option("brick", "image (.png, .tif, .npy) or built-in name: brick, grass, gravel", group=_E,
-                           check=Anything("a file or a built-in name"), positional=True)
+                           check=_ANY_EXEMPLAR, positional=True)
     output: Path | None = option(None, "volume to write: .tif (ImageJ), .ome.tif (OME-TIFF) or .npy", group=_E,
                                  check=_path("a .tif, .ome.tif or .npy file"), short="-o", required=True,
                                  metavar="FILE")
@@ -279,7 +280,7 @@ def resolve(given: dict[str, Any]) -> Settings:
             merged[name] = value
             origin[name] = f"{name} ({where})" if where else "--" + name.replace("_", "-")
     method = merged.get("method", "ml")
-    if method not in METHODS:
+    if not isinstance(method, str) or method not in METHODS:
         raise InputError(f"method {method!r} is not available; use one of {tuple(METHODS)}")
     cls = METHODS[method]
     unused = [_said(name, origin) for name in merged if not _reads(name, method)]
@@ -396,6 +397,7 @@ def run_synth(given: dict[str, Any]) -> int:
 
     settings = resolve(given)
     cmd, backend = settings.command, dict(settings.backend)
+    BackendOptions(**backend)  # its checks (a folder path is a path) before check_outputs reads it
     voxel_size, unit, voxel_from = _voxel_size(cmd)
     check_calibration(voxel_size, unit or "um", Path(cmd.output))  # now, not after the run
     check_outputs(cmd, backend)

@@ -10,6 +10,7 @@ import sys
 from typing import Any
 
 from ..api import METHODS
+from ..core.options import names, refuse_unknown
 from ..errors import InputError
 from .config import read_config
 from .outputs import check_writable
@@ -62,6 +63,10 @@ def run_validate(args: argparse.Namespace) -> int:
         options = read_config(path)
     method = options.pop("method", None)
     method = args.method or method or "ml"
+    if not isinstance(method, str) or method not in METHODS:
+        raise InputError(f"method {method!r} is not available; use one of {tuple(METHODS)}")
+    # only the method's options: a run's own arguments (exemplar, shape, seed) are validate's to give
+    refuse_unknown(options, [n for n in names(METHODS[method]) if n != "method"], f"--config {args.config}")
     try:
         real = load_volume(args.real)
     except OSError as exc:

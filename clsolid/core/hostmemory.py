@@ -8,6 +8,7 @@ killed by the system, often at the finest scale, hours in; it is refused at once
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 
@@ -85,7 +86,7 @@ def check_host_memory(shape: tuple[int, int, int], footprint: Footprint, exempla
     more host memory than is available, by the method's *footprint*, counting *exemplar_terms*
     (:func:`exemplar_terms`) at its bytes a term."""
     exemplar = int(exemplar_terms) * footprint.per_exemplar_term
-    need = int(np.prod(shape, dtype=np.int64)) * footprint.per_voxel + exemplar
+    need = math.prod(shape) * footprint.per_voxel + exemplar  # Python ints: a huge shape must not wrap
     have = available_bytes()
     if have is not None and need > have:
         raise HostMemoryError(shape, need, have, footprint.per_voxel, exemplar, footprint.advice)
@@ -96,7 +97,7 @@ def check_scratch_space(shape: tuple[int, int, int], folder: str) -> None:
     than a *shape* block's state takes there (:data:`SCRATCH_BYTES_PER_VOXEL`)."""
     import shutil
 
-    need = int(np.prod(shape, dtype=np.int64)) * SCRATCH_BYTES_PER_VOXEL
+    need = math.prod(shape) * SCRATCH_BYTES_PER_VOXEL
     free = shutil.disk_usage(folder).free
     if need > free:
         raise InputError(f"a {'x'.join(map(str, shape))} block keeps about {need / 2**30:.1f} GiB of state in the "

@@ -16,6 +16,7 @@ import dataclasses
 import difflib
 import math
 import numbers
+import os
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Iterator
 
@@ -191,6 +192,14 @@ class Anything(Check):
         return True
 
 
+@dataclass(frozen=True)
+class PathLike(Anything):
+    """A file or folder path (a str or an os.PathLike); the class checks the rest (its suffix, whether it exists)."""
+
+    def valid(self, value: Any) -> bool:
+        return isinstance(value, (str, os.PathLike))
+
+
 # ----------------------------------------------------------------------------- declarations
 
 
@@ -272,7 +281,7 @@ def validate(instance: Any) -> None:
     (call it first in ``__post_init__``; checks across fields follow it)."""
     for f, spec in declared(instance):
         value = getattr(instance, f.name)
-        if value is None and spec.none is not None:
+        if value is None and (spec.none is not None or spec.required):  # a required one: its caller says so
             continue
         checked = spec.check(f.name, value)
         if checked is not value:

@@ -114,11 +114,12 @@ def resolve_seed(rng) -> int:
 
 
 def check_shape(shape) -> tuple[int, int, int]:
-    """*shape* as three ints ``(Z, Y, X)``, each at least 1: integers (not bools), or whole floats."""
+    """*shape* as three ints ``(Z, Y, X)``, each at least 1: integers (not bools), or whole floats
+    (not strings, which int() would read too: ``"444"`` is no shape)."""
     try:
         out = tuple(int(s) for s in shape)
         ok = (len(out) == 3 and all(float(s) == o for s, o in zip(shape, out))
-              and not any(isinstance(s, (bool, np.bool_)) for s in shape))
+              and not any(isinstance(s, (bool, np.bool_, str, bytes)) for s in shape))
     except (TypeError, ValueError):
         ok = False
     if not ok:

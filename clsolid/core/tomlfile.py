@@ -21,5 +21,5 @@ def read_toml(path: str | os.PathLike) -> dict[str, Any]:
             return tomllib.load(fh)
     except OSError as exc:
         raise InputError(f"{path}: cannot be read ({exc.strerror or exc})") from None
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:  # TOML is UTF-8 text
         raise InputError(f"{path}: not valid TOML ({exc})") from None

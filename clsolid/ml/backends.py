@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core.hostmemory import Footprint
-from ..core.options import Anything, Choice, Int, Real, documented, option, validate
+from ..core.options import Choice, Int, PathLike, Real, documented, option, validate
 from ..core.scratch import Scratch
 from ..errors import InputError
 
@@ -50,12 +50,12 @@ class BackendOptions:
                               metavar="N", none="the whole block at once")
     scratch: Path | str | None = option(None, "with tile: keep the block's state in memory-mapped files in a folder "
                                         "made in DIR (removed at the end), for blocks larger than the host's memory",
-                                        group=_RUN, check=Anything("a folder path", Path), metavar="DIR",
+                                        group=_RUN, check=PathLike("a folder path", Path), metavar="DIR",
                                         none="in memory")
     client: Any = option(None, "with tile: run the tiles of every set on this Dask client's workers", group=_RUN,
                          flag=None, none="in this process")
     checkpoint: Path | str | None = option(None, "save the run's state in this folder after every sweep, so that a "
-                                           "run can be resumed", group=_RUN, check=Anything("a folder path", Path),
+                                           "run can be resumed", group=_RUN, check=PathLike("a folder path", Path),
                                            metavar="DIR", none="no checkpoints")
     checkpoint_every: float = option(0.0, "seconds between checkpoints (0: after every sweep; always at the end of "
                                      "a scale)", group=_RUN, check=Real(0), metavar="SECONDS")

@@ -135,10 +135,15 @@ def phase_sigma(image: np.ndarray, costs: np.ndarray | None = None) -> float:
 def falloff_weights(offsets: np.ndarray, sigma: float) -> np.ndarray | None:
     """``(R,)`` weight of each neighbour of a view's *offsets* ``(R, 3)``: a Gaussian of its
     distance from the centre with this *sigma* (pixels), scaled to a mean of 1 so that the
-    distances, and with them Silverman's bandwidth, keep their size; None for sigma 0."""
+    distances, and with them Silverman's bandwidth, keep their size; None for sigma 0. A sigma
+    so small that every weight underflows gives the limit: the nearest neighbours alone."""
     if not sigma:
         return None
-    g = np.exp(-np.sum(offsets.astype(np.float64) ** 2, axis=1) / (2.0 * sigma**2))
+    d2 = np.sum(offsets.astype(np.float64) ** 2, axis=1)
+    with np.errstate(divide="ignore", under="ignore"):
+        g = np.exp(-d2 / (2.0 * sigma**2))
+    if not g.sum() > 0:
+        g = (d2 == d2.min()).astype(np.float64)
     return g / g.mean()
 
 
@@ -359,6 +364,22 @@ def view_exemplars(labels_img: np.ndarray | dict[str, np.ndarray], views: tuple[
     return [labels_img[v] for v in views]
 
 
+#: The Parzen bandwidths the kernels hold: their ``1 / (2 h^2)`` is a normal float32.
+BANDWIDTH_RANGE = (1e-18, 1e18)
+
+
+def _check_bandwidth(h: float, params: MLParams, level: int) -> None:
+    """Refuse a bandwidth outside :data:`BANDWIDTH_RANGE` (``1 / (2 h^2)`` would overflow or vanish)."""
+    lo, hi = BANDWIDTH_RANGE
+    if lo <= h <= hi:
+        return
+    given = (f"bandwidth={params.bandwidth!r}" if params.bandwidth is not None
+             else f"bandwidth_factor={params.bandwidth_factor!r}")
+    raise InputError(f"{given} gives a Parzen bandwidth of {h:.3g} at scale {params.scales - level} of "
+                     f"{params.scales}, outside [{lo:g}, {hi:g}], the range the kernels hold; choose a bandwidth near "
+                     "the exemplar's grey-level spread (bandwidth_factor near 1)")
+
+
 def build_scale(
     labels_img: np.ndarray | dict[str, np.ndarray], shape: tuple[int, int, int], params: MLParams, level: int
 ) -> ScaleModel:
@@ -398,6 +419,7 @@ def build_scale(
         factor = params.bandwidth_factor[level]
         # per view: each view's sum runs over its own sites, so n is their mean count
         h = silverman(sigma, int(round(np.mean(counts))), params.neighborhood**2) * factor if sigma > 0 else 1.0
+    _check_bandwidth(h, params, level)
     offsets = np.stack([view_offsets(v, half) for v in params.view_names])
     union = np.unique(offsets.reshape(-1, 3), axis=0)  # the temperatures' neighbours: no parent terms
     sshape = scale_shape(shape, level)

@@ -209,6 +209,8 @@ class SearchParams:
         if out.distance == "auto":
             phases = out.method == "kopf" and categorical and n_values >= 3
             out = replace(out, distance="weighted" if phases else "squared")
+        elif out.distance == "weighted" and n_values < 2:  # one value: no mismatch to weigh, as squared
+            out = replace(out, distance="squared")
         if out.index_histogram is None:
             measured_better = out.method == "wl" or grey_kopf
             out = replace(out, index_histogram=out.search == "coherence" and measured_better)

@@ -129,6 +129,39 @@ def test_a_toml_config_sets_options_and_flags_win(tmp_path, device):
     assert main(["synth", "--config", str(config), "-o", str(out), "-q"]) == 2
 
 
+_SIDECAR = {"exemplar": "ex.npy", "seed": 3, "params": {"method": "ml", "shape": [5, 5, 5], "scales": 1}}
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"seed": None}, "lacks 'seed'"),  # KeyError: 'seed'
+    ({"params": {"method": "ml", "scales": 1}}, "lacks params 'shape'"),  # KeyError: 'shape'
+    ({"voxel_size_from": "--voxel-size"}, "lacks 'voxel_size'"),  # KeyError: 'voxel_size'
+    ({"params": {"method": ["ml"], "shape": [5, 5, 5]}}, "method ['ml'] is not available"),  # unhashable list
+    ({"exemplar": []}, "exemplar=[] must be a file or a built-in name"),  # Path([]) on the pixel size: TypeError
+])
+def test_an_incomplete_sidecar_as_config_is_refused(tmp_path, capsys, change, words):
+    meta = {k: v for k, v in {**_SIDECAR, **change}.items() if v is not None}
+    config = tmp_path / "run.json"
+    config.write_text(json.dumps(meta))
+    out = tmp_path / "again.npy"
+    assert main(["synth", "--config", str(config), "-o", str(out), "--device", "reference", "-q"]) == 2
+    assert words in capsys.readouterr().err and not out.exists()
+
+
+@pytest.mark.parametrize("text, words", [
+    (b"\xe3\x83G\xf8", "not valid TOML"),  # not UTF-8: tomllib's UnicodeDecodeError
+    (b"checkpoint = []\n", "checkpoint=[] must be a folder path"),  # Path([]): TypeError
+    (b"preview = 3\n", "preview=3 must be a .png file"),
+    (b'method = ["ml"]\n', "method ['ml'] is not available"),  # unhashable list: TypeError
+])
+def test_a_toml_config_of_the_wrong_types_is_refused(tmp_path, capsys, text, words):
+    config = tmp_path / "run.toml"
+    config.write_bytes(text)
+    out = tmp_path / "v.npy"
+    assert main(["synth", "brick", "--config", str(config), "-o", str(out), "--device", "reference", "-q"]) == 2
+    assert words in capsys.readouterr().err and not out.exists()
+
+
 def test_a_config_of_another_method_is_refused(tmp_path, capsys):
     config = tmp_path / "run.toml"
     config.write_text('method = "ml"\nrelaxation = "icm"\n')

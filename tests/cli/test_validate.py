@@ -40,3 +40,15 @@ def test_a_misspelt_option_in_the_config_names_the_closest(tmp_path, capsys, rea
     config.write_text("neighbourhood = 3\n")
     assert main(["validate", str(real), "--config", str(config), "--device", "reference"]) == EXIT_USAGE
     assert "neighborhood" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("text, words", [
+    ('method = [{}]\n', "method [{}] is not available"),  # TypeError: unhashable type: 'list'
+    ('exemplar = "x.npy"\nshape = [4, 4, 4]\n', "unknown options 'exemplar', 'shape'"),  # given twice: TypeError
+])
+def test_a_config_of_other_than_the_methods_options_is_refused(tmp_path, capsys, real, text, words):
+    config = tmp_path / "bad.toml"
+    config.write_text(text)
+    out = tmp_path / "r.json"
+    assert main(["validate", str(real), "--config", str(config), "--device", "reference", "-o", str(out)]) == EXIT_USAGE
+    assert words in capsys.readouterr().err and not out.exists()

@@ -4,6 +4,7 @@ before anything is allocated, through the API and the command line."""
 import pickle
 import tracemalloc
 
+import numpy as np
 import pytest
 
 import clsolid
@@ -50,6 +51,16 @@ def test_a_block_over_the_available_memory_is_refused_with_what_to_do(monkeypatc
     with pytest.raises(HostMemoryError):  # the search methods keep more a voxel
         check_host_memory((side, side, side), SEARCH)
     assert SEARCH.per_voxel > ML.per_voxel
+
+
+@pytest.mark.parametrize("shape", [(2**40, 2**40, 2**40), (2**21, 2**21, 2**21)])
+def test_a_block_whose_voxels_overflow_int64_is_refused(shape):
+    # 2^120 voxels wrapped to 0 in int64 (and 2^63 to a negative count): the check passed and
+    # the run went on, building its colour sets for ever
+    with pytest.raises(HostMemoryError):
+        check_host_memory(shape, ML)
+    with pytest.raises(HostMemoryError):
+        clsolid.synthesize(np.eye(8, dtype=np.uint8), shape, device="reference", rng=1, scales=1, neighborhood=3)
 
 
 def test_the_exemplar_windows_are_counted(monkeypatch):

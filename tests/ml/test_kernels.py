@@ -79,6 +79,18 @@ def test_kernel_tables_hold_the_gaussian_factor_and_its_log(small_labels, distan
     assert (table[0, :, n:] == 1).all() and (table[1, :, n:] == 0).all()
 
 
+@pytest.mark.parametrize("sigma", [1e-200, 5e-324])
+def test_a_falloff_too_small_to_weigh_keeps_the_nearest_neighbours(sigma):
+    # every Gaussian weight underflowed to 0 (sigma^2 to 0 as well): 0 / 0 gave NaN weights
+    from clsolid.ml.model import falloff_weights, view_offsets
+
+    off = view_offsets("front", 2)
+    g = falloff_weights(off, sigma)
+    nearest = np.sum(off**2, axis=1) == 1
+    assert np.isfinite(g).all() and (g[nearest] == g.max()).all() and (g[~nearest] == 0).all()
+    assert g.mean() == pytest.approx(1.0)
+
+
 def test_falloff_weighs_each_term_by_its_gaussian(small_labels):
     """The reference's distance with a fall-off is the plain one with neighbour r's term times
     exp(-d_r^2 / (2 sigma^2)), scaled to a mean of 1; without one every term counts alike."""

@@ -435,6 +435,16 @@ def test_distance_resolves_per_exemplar_and_is_checked():
         SearchParams(method="kopf", distance="mismatch")
 
 
+@pytest.mark.parametrize("method", ["wl", "kopf", "chen-wang"])
+def test_weighted_distance_on_a_constant_exemplar_is_squared(method):
+    # one phase has no codes: phase_codes raised ValueError("phase codes need at least two phases")
+    assert SearchParams(method=method, distance="weighted").for_exemplar(1, True).distance == "squared"
+    with pytest.warns(clsolid.ExemplarWarning, match="constant"):
+        volume = clsolid.synthesize(np.full((8, 8), 3, np.uint8), (4, 4, 4), method=method, device="reference",
+                                    rng=1, scales=1, neighborhood=3, distance="weighted")
+    assert (volume == 3).all()
+
+
 @pytest.mark.slow
 def test_phase_codes_make_kopf_blind_to_the_phases_grey_values(device):
     """With weighted mismatches the finest level's matches do not depend on which grey value
