@@ -119,15 +119,15 @@ def _load(exemplar: Any, levels: int | None, rng: Any):
     return image, levels_of, resolve_seed(rng)
 
 
-def _per_view(image: Any, run_params: MLParams | SearchParams, options: dict, given: bool):
+def _per_view(image: Any, run_params: MLParams | SearchParams, given: bool):
     """*run_params* with the views of an exemplar per view (*image* a dict by view); refused where
-    the views were given (in *options*, or as *given* parameters) and name others."""
+    the views were *given* (as an option, or in parameters passed whole) and name others."""
     if not isinstance(image, dict):
         return run_params
     from .core.views import view_set, views_value
 
     names = tuple(image)
-    if ("views" in options or given) and view_set(run_params.views) != names:
+    if given and view_set(run_params.views) != names:
         raise InputError(f"views={run_params.views!r} but the exemplars are for {' and '.join(names)}: "
                          "leave views out, and the views with an exemplar are the ones constrained")
     return _replace(run_params, {"views": views_value(names)})
@@ -262,7 +262,7 @@ def synthesize(
         raise InputError("site_map=True is the search methods' position histogram; method 'ml' has none")
     run = backend_options(backend)
     image, levels_of, seed = _load(exemplar, run_params.levels, rng)
-    run_params = _per_view(image, run_params, options, params is not None)
+    run_params = _per_view(image, run_params, "views" in options or params is not None)
     run_params = run_params.for_exemplar(levels_of.values.size, levels_of.exact, _seam(image), _shape_of(image),
                                          per_view=isinstance(image, dict))
     engine = make_backend(device, run)
@@ -404,7 +404,7 @@ def _synthesize_search(exemplar, shape, params: SearchParams, rng, device, progr
     check_host_memory(shape, SEARCH_FOOTPRINT)
     values = levels_of.to_values(levels_of.labels)
     if isinstance(image, dict):  # each view searches its own exemplar, whole (check_per_view)
-        params = _per_view(image, params, {}, "views" in given)
+        params = _per_view(image, params, "views" in given)
         if params.search == "coherence" and "search" not in given:
             params = _replace(params, {"search": "exact", "seed_components": None, "coherence_levels": None})
         check_per_view(params, site_map)
