@@ -100,20 +100,20 @@ def _check_progress(progress: Any) -> None:
         raise InputError(f"progress={progress!r} must be a function taking a SweepInfo, or None")
 
 
-def _load(exemplar: Any, levels: int | None, rng: Any):
+def _load(exemplar: Any, levels: int | None, rng: Any, channel_axis: int | None = None):
     """The exemplar image (or one per view, a dict), its level map and the seed, as every method takes them."""
     from .exemplar import level_map, load_exemplars
 
-    image = load_exemplars(exemplar)
+    image = load_exemplars(exemplar, channel_axis=channel_axis)
     levels_of = level_map(image, levels)
-    if levels_of.values.size < 2:
-        warnings.warn(f"the exemplar is constant (every pixel {levels_of.values[0].item()!r}): the volume will be too",
-                      ExemplarWarning, stacklevel=3)
-    if isinstance(image, dict) and is_categorical(levels_of.values.size, levels_of.exact):
+    if levels_of.n_labels < 2:
+        warnings.warn(f"the exemplar is constant (every pixel {levels_of.values[0].tolist()!r}): the volume will be "
+                      "too", ExemplarWarning, stacklevel=3)
+    if isinstance(image, dict) and is_categorical(levels_of.n_labels, levels_of.exact):
         for view, labels in levels_of.labels.items():  # one phase set: a phase a view lacks could never be drawn
-            missing = np.setdiff1d(np.arange(levels_of.values.size), labels)
+            missing = np.setdiff1d(np.arange(levels_of.n_labels), labels)
             if missing.size:
-                names = ", ".join(repr(v.item()) for v in levels_of.values[missing])
+                names = ", ".join(repr(v.tolist()) for v in levels_of.values[missing])
                 raise InputError(f"the {view} exemplar lacks phase {names}, which the other views' exemplars hold: "
                                  "the exemplars of a segmented material must share one phase set")
     return image, levels_of, resolve_seed(rng)
@@ -135,7 +135,10 @@ def _per_view(image: Any, run_params: MLParams | SearchParams, given: bool):
 
 def _seam(image: Any) -> float:
     """The largest seam ratio of the exemplar or exemplars (:func:`clsolid.core.slices.seam_ratio`)."""
-    return max(seam_ratio(im) for im in (image.values() if isinstance(image, dict) else [image]))
+    from .colour import luminance
+
+    return max(seam_ratio(luminance(im) if im.ndim == 3 else im)
+               for im in (image.values() if isinstance(image, dict) else [image]))
 
 
 def _described(image: Any) -> str:
@@ -147,7 +150,7 @@ def _described(image: Any) -> str:
 
 def _shape_of(image: Any) -> tuple[int, int]:
     """The exemplar's shape; with one per view, the largest's."""
-    return max((im.shape for im in image.values()), key=np.prod) if isinstance(image, dict) else image.shape
+    return max((im.shape[:2] for im in image.values()), key=np.prod) if isinstance(image, dict) else image.shape[:2]
 
 
 def synthesize(
@@ -163,6 +166,7 @@ def synthesize(
     full_output: bool = False,
     site_map: bool = False,
     params: MLParams | SearchParams | None = None,
+    channel_axis: int | None = None,
     **options: Any,
 ):
     """Grow a solid texture whose slices look like a 2D exemplar.
@@ -179,6 +183,7 @@ def synthesize(
         quantised on one shared set of levels, and segmented ones must share one phase set.
         ``"ml"`` sums over them exactly (``likelihood="exact"``), ``"kopf"`` and ``"wl"``
         search them whole (``search="exact"``); ``"chen-wang"`` takes one exemplar.
+        A colour PNG or TIFF, or an array with *channel_axis*, is an RGB exemplar (``"ml"``).
     shape : tuple of 3 ints
         ``(Z, Y, X)`` size of the block. The block is toroidal (it tiles).
     method : {"ml", "wl", "kopf", "chen-wang"}
@@ -210,6 +215,11 @@ def synthesize(
         (``SynthesisResult.site_use``).
     params : MLParams or SearchParams, optional
         The method's parameters as an object; *options* then change some of them.
+    channel_axis : int or None
+        The axis of an array exemplar's RGB channels, as in scikit-image (None: grey). The
+        channels are one joint feature: the label set is a palette of at most ``levels``
+        colours (k-means in CIELAB where the exemplar has more), and the volume is
+        ``(Z, Y, X, 3)`` in the exemplar's dtype, every voxel a palette colour.
     **options
         The method's parameters by name. The ones to know first:
 
@@ -256,15 +266,16 @@ def synthesize(
         if backend is not None:
             raise InputError(f"backend= is the likelihood method's (tiles, Dask, scratch, checkpoints); {method} "
                              "runs in one piece on one device")
+        given = set(options) | ({"search", "views"} if params is not None else set())
         return _synthesize_search(exemplar, shape, run_params, rng, device, progress, output, full_output, site_map,
-                                  given=set(options) | ({"search", "views"} if params is not None else set()))
+                                  channel_axis, given=given)
     if site_map:
         raise InputError("site_map=True is the search methods' position histogram; method 'ml' has none")
     run = backend_options(backend)
-    image, levels_of, seed = _load(exemplar, run_params.levels, rng)
+    image, levels_of, seed = _load(exemplar, run_params.levels, rng, channel_axis)
     run_params = _per_view(image, run_params, "views" in options or params is not None)
-    run_params = run_params.for_exemplar(levels_of.values.size, levels_of.exact, _seam(image), _shape_of(image),
-                                         per_view=isinstance(image, dict))
+    run_params = run_params.for_exemplar(levels_of.n_labels, levels_of.exact, _seam(image), _shape_of(image),
+                                         per_view=isinstance(image, dict), colour=levels_of.colour)
     engine = make_backend(device, run)
     hook = None
     if run.checkpoint is not None:
@@ -291,16 +302,17 @@ def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_outp
         check_scratch_space(shape, scratch.root)
     try:
         vol, timings, bandwidths = run_ml(levels_of.labels, shape, params, seed, backend, progress,
-                                          checkpoint=hook, resume=state)
+                                          checkpoint=hook, resume=state, palette=levels_of.features)
         # a run of planes at a time: no whole temporary (host memory); with the state on disk
         # the result is there too, in files that go when its arrays do
         store = scratch if on_disk else Scratch()
-        labels = store.apply(np.rint, np.uint8 if levels_of.values.size <= 256 else np.uint16, vol, kept=True)
-        if params.despeckle and is_categorical(levels_of.values.size, levels_of.exact):
+        labels = store.apply(np.rint, np.uint8 if levels_of.n_labels <= 256 else np.uint16, vol, kept=True)
+        if params.despeckle and is_categorical(levels_of.n_labels, levels_of.exact):
             timings["despeckled"] = despeckle(labels)
         values = None
         if full_output or output != "labels":
-            values = store.apply(levels_of.to_values, levels_of.values.dtype, labels, kept=True)
+            values = store.apply(levels_of.to_values, levels_of.values.dtype, labels, kept=True,
+                                 trailing=levels_of.values.shape[1:])
     finally:
         if scratch is not None:
             scratch.close()
@@ -388,7 +400,7 @@ def _large_on(store: Scratch) -> Callable[[tuple, Any], np.ndarray]:
 
 
 def _synthesize_search(exemplar, shape, params: SearchParams, rng, device, progress, output, full_output,
-                       site_map: bool, given: set[str] = frozenset()):
+                       site_map: bool, channel_axis: int | None = None, given: set[str] = frozenset()):
     """:func:`synthesize` for the fixed-neighbourhood search methods (``"wl"``, ``"kopf"``, ``"chen-wang"``)."""
     from .exemplar import pooled
     from .search.driver import check_per_view, run_search
@@ -400,7 +412,10 @@ def _synthesize_search(exemplar, shape, params: SearchParams, rng, device, progr
                          "use output='values'")
     if site_map and not full_output:
         raise InputError("site_map=True needs full_output=True (the map is SynthesisResult.site_use)")
-    image, levels_of, seed = _load(exemplar, params.levels, rng)
+    image, levels_of, seed = _load(exemplar, params.levels, rng, channel_axis)
+    if levels_of.colour:
+        raise InputError(f"method={method!r} takes grey exemplars; a colour one takes method='ml' (or convert it: "
+                         "skimage.color.rgb2gray)")
     check_host_memory(shape, SEARCH_FOOTPRINT)
     values = levels_of.to_values(levels_of.labels)
     if isinstance(image, dict):  # each view searches its own exemplar, whole (check_per_view)

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import skimage.data
 
+from .colour import as_colour, float_top, lab, palette
 from .core.views import VIEW_ORDER
 from .core.geometry import window_grid  # noqa: F401 (where the exemplar's windows lie)
 from .errors import InputError
@@ -103,8 +104,8 @@ def _reject_colour_or_volume(shape: tuple[int, ...]) -> None:
     last = shape[-1]
     if last in (3, 4):
         raise InputError(
-            f"exemplar has shape {shape}, a colour (RGB/RGBA) image; colour exemplars are not supported yet, "
-            "convert it to grey first (e.g. skimage.color.rgb2gray(image))"
+            f"exemplar has shape {shape}: a colour (RGB) image or a volume; for colour pass channel_axis=-1, "
+            "for a volume one slice (e.g. volume[0])"
         )
     if last == 2:
         raise InputError(
@@ -117,18 +118,21 @@ def _reject_colour_or_volume(shape: tuple[int, ...]) -> None:
     )
 
 
-def _check_exemplar_array(data: np.ndarray) -> np.ndarray:
-    """Validate an exemplar array; return it 2D, native byte order, as its own copy."""
-    if data.ndim == 3 and data.shape[-1] == 1:
+def _check_exemplar_array(data: np.ndarray, channel_axis: int | None = None) -> np.ndarray:
+    """Validate an exemplar array; return it 2D (grey) or ``(H, W, 3)`` (colour: the
+    channels along *channel_axis*), native byte order, as its own copy."""
+    if channel_axis is not None:
+        data = as_colour(data, channel_axis)
+    if data.ndim == 3 and channel_axis is None and data.shape[-1] == 1:
         data = data[..., 0]
-    if data.ndim == 3 and data.shape[0] == 1:
+    if data.ndim == 3 and channel_axis is None and data.shape[0] == 1:
         data = data[0]  # a one-slice stack is a 2D image
-    if data.ndim == 3:
+    if data.ndim == 3 and channel_axis is None:
         _reject_colour_or_volume(data.shape)
-    if data.ndim != 2:
+    if data.ndim not in (2, 3):
         raise InputError(
-            f"exemplar must be a 2D grey image, got a {data.ndim}D array of shape {data.shape}; "
-            "pass a (height, width) array"
+            f"exemplar must be a 2D image (grey, or colour with channel_axis), got a {data.ndim}D array of shape "
+            f"{data.shape}; pass a (height, width) array"
         )
     if data.size == 0:
         raise InputError(f"exemplar is empty (shape {data.shape}); both dimensions must be at least 1")
@@ -159,12 +163,14 @@ def _load_string(source: str, builtin_size: int) -> np.ndarray:
 
 
 def _load_file(path: str | os.PathLike) -> np.ndarray:
-    """Read an exemplar file as stored, then validate it."""
+    """Read an exemplar file as stored, then validate it: a last axis of 3 or 4 samples is a
+    colour image's (PNG, RGB TIFF)."""
     data, _ = _read_any(path, "exemplar")
-    return _check_exemplar_array(data)
+    colour = data.ndim == 3 and data.shape[-1] in (3, 4) and data.shape[0] > 1
+    return _check_exemplar_array(data, -1 if colour else None)
 
 
-def load_exemplar(source: Any, *, builtin_size: int = 64) -> np.ndarray:
+def load_exemplar(source: Any, *, builtin_size: int = 64, channel_axis: int | None = None) -> np.ndarray:
     """Load and validate an exemplar.
 
     Parameters
@@ -173,24 +179,29 @@ def load_exemplar(source: Any, *, builtin_size: int = 64) -> np.ndarray:
         A 2D array; a path to a ``.png``, ``.tif``, ``.tiff`` or ``.npy`` file
         (extension in any case); or a built-in name (see :data:`BUILTINS`).
         A trailing singleton channel axis ``(H, W, 1)`` and a leading
-        singleton axis ``(1, H, W)`` are squeezed away.
+        singleton axis ``(1, H, W)`` are squeezed away. A file whose last axis holds 3
+        samples (a colour PNG or TIFF) is an RGB image.
     builtin_size : int, default 64
         Side of a built-in exemplar (``builtin_exemplar(name, size=...)``),
         in ``[1, 256]``.
+    channel_axis : int or None, default None
+        The axis of an array's colour channels (as in scikit-image): the array is then an
+        RGB image. None: the array is grey.
 
     Returns
     -------
     numpy.ndarray
-        A 2D C-contiguous copy in native byte order that keeps the source dtype
-        and units: uint8 stays 0..255, uint16 stays 0..65535, floats are
+        A 2D (grey) or ``(H, W, 3)`` (RGB) C-contiguous copy in native byte order that keeps
+        the source dtype and units: uint8 stays 0..255, uint16 stays 0..65535, floats are
         unchanged. Keeping the dtype lets ``quantise(image, levels=None)`` see
-        that an image is 8-bit. Built-ins are float64 on the 0..255 scale.
+        that an image is 8-bit. Built-ins are float64 on the 0..255 scale. An RGB image
+        whose three channels are equal comes back grey.
 
     Raises
     ------
     InputError
-        Missing, unreadable or unsupported file; unknown name; colour image,
-        3D volume or other non-2D shape; empty array; bool, complex, object,
+        Missing, unreadable or unsupported file; unknown name; RGBA or another channel
+        count; 3D volume or other non-2D shape; empty array; bool, complex, object,
         string or other non-numeric dtype; NaN or infinite values.
     """
     builtin_size = _check_int(
@@ -198,7 +209,7 @@ def load_exemplar(source: Any, *, builtin_size: int = 64) -> np.ndarray:
         f"built-ins are averaged from a {_DEFAULT_REGION} px region; for larger ones call builtin_exemplar",
     )
     if isinstance(source, np.ndarray):
-        return _check_exemplar_array(source)
+        return _check_exemplar_array(source, channel_axis)
     if isinstance(source, str):
         return _load_string(source, builtin_size)
     if isinstance(source, os.PathLike):
@@ -235,7 +246,8 @@ def _scaled_floor(image: np.ndarray, lo: Any, hi: Any, levels: int) -> np.ndarra
 VIEW_KEYS = VIEW_ORDER
 
 
-def load_exemplars(source: Any, *, builtin_size: int = 64) -> np.ndarray | dict[str, np.ndarray]:
+def load_exemplars(source: Any, *, builtin_size: int = 64,
+                   channel_axis: int | None = None) -> np.ndarray | dict[str, np.ndarray]:
     """Load one exemplar, or one per view.
 
     Parameters
@@ -243,14 +255,14 @@ def load_exemplars(source: Any, *, builtin_size: int = 64) -> np.ndarray | dict[
     source : numpy.ndarray, str, os.PathLike or dict
         One exemplar (:func:`load_exemplar`), or a dict ``{view: exemplar}`` of two or three
         of ``"front"``, ``"right"``, ``"top"``, each anything :func:`load_exemplar` takes.
-    builtin_size : int, default 64
-        As for :func:`load_exemplar`.
+    builtin_size, channel_axis
+        As for :func:`load_exemplar` (one *channel_axis* for every view's array).
 
     Returns
     -------
     numpy.ndarray or dict
         The image, or ``{view: image}`` in :data:`VIEW_KEYS` order. The images may differ in
-        size, not in dtype.
+        size, not in dtype, and are all grey or all colour.
 
     Raises
     ------
@@ -259,7 +271,7 @@ def load_exemplars(source: Any, *, builtin_size: int = 64) -> np.ndarray | dict[
         view, fewer than two views, or images of different dtypes.
     """
     if not isinstance(source, dict):
-        return load_exemplar(source, builtin_size=builtin_size)
+        return load_exemplar(source, builtin_size=builtin_size, channel_axis=channel_axis)
     unknown = [k for k in source if k not in VIEW_KEYS]
     if unknown:
         raise InputError(f"exemplar keys {unknown!r} are not views; use two or three of {', '.join(VIEW_KEYS)}")
@@ -269,13 +281,16 @@ def load_exemplars(source: Any, *, builtin_size: int = 64) -> np.ndarray | dict[
     images = {}
     for view in (v for v in VIEW_KEYS if v in source):
         try:
-            images[view] = load_exemplar(source[view], builtin_size=builtin_size)
+            images[view] = load_exemplar(source[view], builtin_size=builtin_size, channel_axis=channel_axis)
         except InputError as err:
             raise InputError(f"the {view} exemplar: {err}") from None
     dtypes = {v: str(im.dtype) for v, im in images.items()}
     if len(set(dtypes.values())) > 1:
         raise InputError(f"the views' exemplars must share one dtype, got {dtypes}; convert them to one "
                          "(e.g. image.astype(np.uint8)) so that their values mean the same")
+    kinds = {v: "colour" if im.ndim == 3 else "grey" for v, im in images.items()}
+    if len(set(kinds.values())) > 1:
+        raise InputError(f"the views' exemplars must be all grey or all colour, got {kinds}")
     return images
 
 
@@ -283,7 +298,7 @@ def pooled(images: np.ndarray | dict[str, np.ndarray]) -> np.ndarray:
     """One image, or every view's pixels in one row (their statistics pooled)."""
     if not isinstance(images, dict):
         return images
-    return np.concatenate([im.ravel() for im in images.values()])[None, :]
+    return np.concatenate([im.reshape(-1, *im.shape[2:]) for im in images.values()])[None]
 
 
 def quantise(image: np.ndarray, levels: int | None = 32) -> np.ndarray:
@@ -355,11 +370,25 @@ class LevelMap:
         True when ``values`` are exactly the values found in the exemplar (a binary or
         segmented image, or one already holding at most ``levels`` values); False when
         each is the mean of the exemplar pixels quantised to that level.
+    features : numpy.ndarray or None
+        A colour exemplar's palette in CIELAB, ``(L, 3)`` float64: where the Parzen
+        distances between labels are taken (:mod:`clsolid.colour`). None for grey.
     """
 
     labels: np.ndarray | dict[str, np.ndarray]
     values: np.ndarray
     exact: bool
+    features: np.ndarray | None = None
+
+    @property
+    def colour(self) -> bool:
+        """Whether the labels stand for colours (``values`` is ``(L, 3)``)."""
+        return self.features is not None
+
+    @property
+    def n_labels(self) -> int:
+        """How many labels there are (``values``' rows)."""
+        return len(self.values)
 
     def to_values(self, labels: np.ndarray | dict[str, np.ndarray]) -> np.ndarray | dict[str, np.ndarray]:
         """Map label indices back to the exemplar's values (and dtype); a dict view by view."""
@@ -417,9 +446,16 @@ def level_map(image: np.ndarray | dict[str, np.ndarray], levels: int | None) -> 
     """
     if isinstance(image, dict):  # one level set for every view: their pixels pooled
         pool = level_map(pooled(image), levels)
-        cuts = np.cumsum([im.size for im in image.values()])[:-1]
+        cuts = np.cumsum([im.shape[0] * im.shape[1] for im in image.values()])[:-1]
         parts = np.split(pool.labels.ravel(), cuts)
-        return LevelMap({v: p.reshape(im.shape) for (v, im), p in zip(image.items(), parts)}, pool.values, pool.exact)
+        return LevelMap({v: p.reshape(im.shape[:2]) for (v, im), p in zip(image.items(), parts)}, pool.values,
+                        pool.exact, pool.features)
+    if image.ndim == 3:  # colour: a palette, its distances in CIELAB
+        if levels is None:
+            raise InputError("levels=None keeps the 256 levels of an 8-bit grey image; a colour exemplar needs a "
+                             "number of colours (e.g. levels=32)")
+        labels, values, exact = palette(image, _check_levels(levels))
+        return LevelMap(labels, values, exact, lab(values, image.dtype, float_top(image)))
     if levels is None:
         labels = quantise(image, None)
         return LevelMap(labels, np.arange(256, dtype=np.uint8), True)

@@ -52,9 +52,10 @@ class GalleryEntry:
     ----------
     name : str
         Its name in the gallery.
-    kind : {"categorical", "grey"}
+    kind : {"categorical", "grey", "colour"}
         ``"categorical"``: a few phases, each one grey value (see :attr:`phases`);
-        ``"grey"``: a continuous grey-level image.
+        ``"grey"``: a continuous grey-level image; ``"colour"``: an RGB photograph
+        (:func:`colour_names`).
     description : str
         One line: the material it stands for and what to look for.
     phases : tuple of (int, str)
@@ -348,6 +349,29 @@ def _tissue(size: int, rng: np.random.Generator | None) -> np.ndarray:
     return grey_levels(_area_downscale(grey, size))
 
 
+#: The colour exemplars' fields: (scikit-image image, rows, columns), each a square of
+#: texture-like material, area-averaged to ``size`` (at most the field's side).
+_COLOUR_FIELDS = {
+    "wood": ("coffee", slice(320, 400), slice(0, 80)),
+    "tabletop": ("coffee", slice(0, 128), slice(472, 600)),
+    "fur": ("chelsea", slice(0, 80), slice(190, 270)),
+    "stained": ("immunohistochemistry", slice(256, 512), slice(128, 384)),
+}
+
+
+def _colour_photo(name: str) -> Callable[[int, np.random.Generator | None], np.ndarray]:
+    def make(size: int, rng: np.random.Generator | None) -> np.ndarray:
+        import skimage.data
+
+        image, rows, cols = _COLOUR_FIELDS[name]
+        field = getattr(skimage.data, image)()[rows, cols].astype(np.float64)
+        if size > field.shape[0]:
+            raise InputError(f"the colour exemplar {name!r} is a {field.shape[0]}² field of its photograph: "
+                             f"size={size} would enlarge it; use size <= {field.shape[0]}")
+        return grey_levels(np.stack([_area_downscale(field[..., c], size) for c in range(3)], axis=-1))
+    return make
+
+
 # --------------------------------------------------------------------------- registry
 
 _BINARY_PORE = ((0, "pore"), (255, "solid"))
@@ -405,12 +429,32 @@ _ENTRIES = (
                  (), None, "skimage.data.immunohistochemistry(), rows 256-512 and columns 128-384, "
                            "luminance, area-averaged", _tissue),
 )
-_REGISTRY = {e.name: e for e in _ENTRIES}
+#: The colour gallery: RGB photographs bundled with scikit-image (coffee and chelsea CC0, the
+#: IHC image without known copyright restrictions, as scikit-image's data notes say).
+_COLOUR_ENTRIES = (
+    GalleryEntry("wood", "colour", "scratched light wood (scikit-image coffee, CC0): short streaks, a few knots",
+                 (), None, "skimage.data.coffee(), rows 320-400, columns 0-80", _colour_photo("wood")),
+    GalleryEntry("tabletop", "colour", "warm wood of a table top (scikit-image coffee, CC0): faint grain, shading",
+                 (), None, "skimage.data.coffee(), rows 0-128, columns 472-600", _colour_photo("tabletop")),
+    GalleryEntry("fur", "colour", "a cat's forehead fur (scikit-image chelsea, CC0): short tabby hairs and stripes",
+                 (), None, "skimage.data.chelsea(), rows 0-80, columns 190-270", _colour_photo("fur")),
+    GalleryEntry("stained", "colour",
+                 "stained colon tissue (scikit-image IHC image): blue nuclei, brown stain, pale stroma",
+                 (), None, "skimage.data.immunohistochemistry(), rows 256-512 and columns 128-384, area-averaged",
+                 _colour_photo("stained")),
+)
+_REGISTRY = {e.name: e for e in _ENTRIES + _COLOUR_ENTRIES}
 
 
 def gallery_names() -> tuple[str, ...]:
-    """Names of the gallery's exemplars, in the order the gallery lists them."""
-    return tuple(_REGISTRY)
+    """Names of the gallery's grey and segmented exemplars, in the order the gallery lists
+    them (the colour ones: :func:`colour_names`)."""
+    return tuple(e.name for e in _ENTRIES)
+
+
+def colour_names() -> tuple[str, ...]:
+    """Names of the colour gallery's RGB exemplars (every size up to 64)."""
+    return tuple(e.name for e in _COLOUR_ENTRIES)
 
 
 def gallery_info(name: str) -> GalleryEntry:
@@ -442,13 +486,13 @@ def gallery_exemplar(name: str, size: int = 64) -> np.ndarray:
     -------
     numpy.ndarray
         ``(size, size)`` uint8. A categorical exemplar holds exactly its phase values
-        (:attr:`GalleryEntry.phase_values`); a grey one spans 0..255. The same name and
-        size always give the same image.
+        (:attr:`GalleryEntry.phase_values`); a grey one spans 0..255; a colour one is
+        ``(size, size, 3)``. The same name and size always give the same image.
 
     Raises
     ------
     InputError
-        Unknown ``name``, or ``size`` out of range.
+        Unknown ``name``, or ``size`` out of range (a colour one's: above its field).
     """
     entry = gallery_info(name)
     size = _check_int(size, "size", MIN_SIZE, MAX_SIZE, f"the gallery is meant at sizes {SIZES}")

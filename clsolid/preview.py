@@ -31,12 +31,15 @@ def view_slice(volume: np.ndarray, view: str, depth: int) -> np.ndarray:
     if view == "front":
         return volume[depth]
     if view == "right":
-        return volume[:, :, depth].T
+        return np.swapaxes(volume[:, :, depth], 0, 1)  # a colour's channels stay last
     return volume[:, depth, :]
 
 
 def grey8(panels: list[np.ndarray]) -> list[np.ndarray]:
-    """Every panel through one linear scale, the joint min to black and max to white."""
+    """Every panel through one linear scale, the joint min to black and max to white; RGB
+    panels ``(H, W, 3)`` as their colours (:func:`colour8`)."""
+    if panels and panels[0].ndim == 3:
+        return colour8(panels)
     lo = min(float(p.min()) for p in panels)
     hi = max(float(p.max()) for p in panels)
     half_span = hi / 2 - lo / 2  # halving first keeps the span finite for extreme floats
@@ -44,6 +47,19 @@ def grey8(panels: list[np.ndarray]) -> list[np.ndarray]:
     for p in panels:
         scaled = (p.astype(np.float64) / 2 - lo / 2) * (255.0 / half_span) if half_span > 0 else np.zeros(p.shape)
         out.append(np.clip(np.rint(scaled), 0, 255).astype(np.uint8))
+    return out
+
+
+def colour8(panels: list[np.ndarray]) -> list[np.ndarray]:
+    """RGB panels as 8-bit colours: integers by their type's full range, floats by 0..1 (or
+    0..their joint maximum, where that passes 1), so that a colour looks as it is, unstretched."""
+    from .colour import float_top
+
+    top = max(float_top(p) for p in panels)
+    out = []
+    for p in panels:
+        full = float(np.iinfo(p.dtype).max) if p.dtype.kind in "iu" else top
+        out.append(np.clip(np.rint(p.astype(np.float64) * (255.0 / full)), 0, 255).astype(np.uint8))
     return out
 
 
@@ -61,10 +77,13 @@ def _font() -> Any:
 
 
 def _check_inputs(exemplar: Any, volume: Any) -> tuple[np.ndarray, np.ndarray]:
-    if not isinstance(exemplar, np.ndarray) or exemplar.ndim != 2 or exemplar.size == 0:
-        shape = getattr(exemplar, "shape", type(exemplar).__name__)
-        raise InputError(f"exemplar must be a non-empty 2D numpy array, got {shape}; pass the 2D exemplar")
     vol = _check_volume(volume)
+    rgb = vol.ndim == 4  # then the exemplar is RGB too, (H, W, 3)
+    if not isinstance(exemplar, np.ndarray) or exemplar.ndim != 2 + rgb or exemplar.size == 0 or (
+            rgb and exemplar.shape[-1] != 3):
+        shape = getattr(exemplar, "shape", type(exemplar).__name__)
+        want = "an RGB (H, W, 3) array, as the volume is RGB" if rgb else "a non-empty 2D numpy array"
+        raise InputError(f"exemplar must be {want}, got {shape}; pass the exemplar the volume was grown from")
     for name, arr in (("exemplar", exemplar), ("volume", vol)):
         if arr.dtype.kind not in "biuf":
             raise InputError(f"{name} has unsupported dtype {arr.dtype}; use an integer or float array")
@@ -137,12 +156,12 @@ def _draw_cube(front: np.ndarray, top: np.ndarray, right: np.ndarray, scale: int
     its centre falls on, inverting that shear (nearest neighbour), so the front face is an exact
     ``scale`` x ``scale`` enlargement.
     """
-    H, W = front.shape
+    H, W = front.shape[:2]
     D = top.shape[0]
     du, dv = depth * np.cos(np.radians(angle)), depth * np.sin(np.radians(angle))
     # The front face starts on a whole pixel row, below the back edge's rise.
     rise = math.ceil(D * dv * scale)
-    out = np.full((rise + H * scale + 1, math.ceil((W + D * du) * scale) + 1), 255, np.uint8)
+    out = np.full((rise + H * scale + 1, math.ceil((W + D * du) * scale) + 1, *front.shape[2:]), 255, np.uint8)
     v, u = np.mgrid[: out.shape[0], : out.shape[1]]
     u = (u + 0.5) / scale
     v = (v + 0.5 - rise) / scale  # voxel units, origin at the front face's top-left corner
@@ -190,7 +209,8 @@ def render_cube(volume: np.ndarray, *, corner: tuple[int, int, int] | None = Non
     Parameters
     ----------
     volume : numpy.ndarray
-        ``(Z, Y, X)`` volume, grey levels or phase labels of any real dtype.
+        ``(Z, Y, X)`` volume, grey levels or phase labels of any real dtype, or an RGB one
+        ``(Z, Y, X, 3)`` (then drawn in its colours, :func:`colour8`).
     corner : (int, int, int) or None
         ``(z, y, x)``: draw the block ``volume[z:, y:, :x + 1]``, whose visible faces are the
         slices ``volume[z]``, ``volume[:, y, :]`` and ``volume[:, :, x]``. None: the whole
@@ -211,8 +231,8 @@ def render_cube(volume: np.ndarray, *, corner: tuple[int, int, int] | None = Non
     Returns
     -------
     numpy.ndarray
-        2D uint8 grey image on a white background. The faces share one linear grey scale,
-        their joint minimum black and maximum white.
+        2D uint8 grey image on a white background (``(H, W, 3)`` for an RGB volume). The
+        faces share one linear grey scale, their joint minimum black and maximum white.
 
     Notes
     -----
@@ -274,11 +294,13 @@ def render_preview(exemplar: np.ndarray | dict[str, np.ndarray], volume: np.ndar
     measure = ImageDraw.Draw(Image.new("L", (1, 1)))
     widths = [max(panel.shape[1], int(measure.textlength(c, font=font)) + 4) for panel, c in zip(panels, captions)]
     height = CAPTION_HEIGHT + max(panel.shape[0] for panel in panels) + PREVIEW_GAP
-    canvas = Image.new("L", (sum(widths) + PREVIEW_GAP * (len(panels) + 1), height), 255)
+    rgb = vol.ndim == 4
+    white, black = ((255, 255, 255), (0, 0, 0)) if rgb else (255, 0)
+    canvas = Image.new("RGB" if rgb else "L", (sum(widths) + PREVIEW_GAP * (len(panels) + 1), height), white)
     draw = ImageDraw.Draw(canvas)
     boxes, x = [], PREVIEW_GAP
     for panel, caption, width in zip(panels, captions, widths):
-        draw.text((x, 4), caption, fill=0, font=font)
+        draw.text((x, 4), caption, fill=black, font=font)
         canvas.paste(Image.fromarray(np.ascontiguousarray(panel)), (x, CAPTION_HEIGHT))
         boxes.append((x, CAPTION_HEIGHT, panel.shape[1], panel.shape[0]))
         x += width + PREVIEW_GAP
@@ -299,7 +321,8 @@ def save_preview(path: PathLike, exemplar: np.ndarray | dict[str, np.ndarray], v
         2D exemplar, in the same units as the volume; or one per view, ``{view: exemplar}``
         (each then has its own panel).
     volume : numpy.ndarray
-        ``(Z, Y, X)`` volume.
+        ``(Z, Y, X)`` volume, or ``(Z, Y, X, 3)`` RGB (the exemplar then RGB too: the
+        panels show their colours, :func:`colour8`).
     depths : dict, optional
         Slice index per view (``front``: z, ``right``: x, ``top``: y); default the middle.
     constrained : sequence of str

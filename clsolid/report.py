@@ -28,7 +28,7 @@ class PlottingUnavailable(MissingDependencyError):
 
 
 def load_exemplar(path: Any) -> np.ndarray:
-    """Read a 2D grey exemplar (.npy, .tif/.tiff, .png, or a built-in name).
+    """Read a 2D grey or RGB exemplar (.npy, .tif/.tiff, .png, or a built-in name).
 
     The same reader as :func:`clsolid.synthesize` uses: see :func:`clsolid.exemplar.load_exemplar`.
     """
@@ -38,15 +38,19 @@ def load_exemplar(path: Any) -> np.ndarray:
 
 
 def load_volume(path: Any) -> np.ndarray:
-    """Read a 3D ``(Z, Y, X)`` volume from .npy or .tif/.tiff (leading singleton axes dropped).
+    """Read a 3D ``(Z, Y, X)`` volume, or an RGB one ``(Z, Y, X, 3)``, from .npy or .tif/.tiff
+    (leading singleton axes dropped).
 
     Uses :func:`clsolid.volumeio.load_volume`.
     """
     from .volumeio import load_volume as _load
 
-    arr = _squeeze(_load(path)[0])
-    if arr.ndim != 3:
-        raise InputError(f"VOLUME={str(path)!r} holds an array of shape {arr.shape}; expected (Z, Y, X)")
+    arr = _load(path)[0]
+    rgb = arr.ndim == 4 and arr.shape[-1] == 3
+    arr = arr if rgb else _squeeze(arr)
+    if arr.ndim != 3 and not rgb:
+        raise InputError(f"VOLUME={str(path)!r} holds an array of shape {arr.shape}; expected (Z, Y, X) or RGB "
+                         "(Z, Y, X, 3)")
     return arr
 
 
@@ -67,7 +71,8 @@ def like_with_like(exemplar: np.ndarray | dict[str, np.ndarray], sidecar: pathli
 
     A volume of level means is compared after quantising both into the synthesis's
     levels; a volume of level indices against the exemplar's indices (an exemplar per view,
-    a dict, on their shared levels); a volume of the exemplar's exact values as it is.
+    a dict, on their shared levels); a volume of the exemplar's exact values as it is. A
+    colour volume of palette colours is compared with the exemplar in that palette's colours.
     Without a sidecar nothing changes.
 
     Returns
@@ -87,6 +92,10 @@ def like_with_like(exemplar: np.ndarray | dict[str, np.ndarray], sidecar: pathli
                 f"{sidecar}: the volume holds level indices; the exemplar is compared as indices too")
     if exact or levels is None:
         return exemplar, None, ""
+    if any(np.ndim(im) == 3 for im in (exemplar.values() if isinstance(exemplar, dict) else [exemplar])):
+        palette = level_map(exemplar, levels)
+        return (palette.to_values(palette.labels), None,
+                f"{sidecar}: a palette of {levels} colours; the exemplar is compared in those colours")
     return exemplar, int(levels), f"{sidecar}: level means of {levels} levels; both quantised to {levels} levels"
 
 

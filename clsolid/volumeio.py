@@ -291,6 +291,7 @@ def _read_tiff(path: pathlib.Path, param: str) -> tuple[np.ndarray, dict]:
                 if tif.is_ome and not tif.is_imagej:
                     info.update(_ome_info(tif.ome_metadata))
                 ome_stack = info.pop("ome_stack", False)
+                rgb = bool(tif.pages) and tif.pages[0].photometric == tifffile.PHOTOMETRIC.RGB
         except MemoryError as exc:  # a damaged header can declare terabytes
             raise InputError(f"{param} {str(path)!r} declares an image larger than the memory free ({exc}); "
                              "check that the file is not damaged, or use a smaller image") from exc
@@ -303,7 +304,8 @@ def _read_tiff(path: pathlib.Path, param: str) -> tuple[np.ndarray, dict]:
         raise InputError(f"{param} {str(path)!r} is a damaged TIFF: {len(complaints.messages)} of its tags could "
                          f"not be read (the first: {complaints.messages[0]}) and it holds no image; check the file")
     # tifffile squeezes a one-slice stack to 2D; our marker (an OME stack's axes) says it was a volume.
-    if data.ndim == 2 and (props.get(_PROP_AXES) == "ZYX" or ome_stack):
+    stack = props.get(_PROP_AXES) in ("ZYX", "ZYXS") or ome_stack
+    if stack and data.ndim == (3 if rgb else 2):  # one plane, RGB or grey
         data = data[np.newaxis]
     return data, info
 
@@ -424,15 +426,15 @@ def _check_metadata(metadata: Any) -> str | None:
 
 
 def _check_volume(volume: Any) -> np.ndarray:
-    """A non-empty, real-valued 3D ndarray."""
+    """A non-empty, real-valued 3D ndarray, or an RGB one ``(Z, Y, X, 3)``."""
     if not isinstance(volume, np.ndarray):
         raise InputError(
             f"volume must be a numpy array of shape (Z, Y, X), got {type(volume).__name__}; "
             "pass np.asarray(volume)"
         )
-    if volume.ndim != 3:
+    if volume.ndim != 3 and not (volume.ndim == 4 and volume.shape[-1] == 3):
         raise InputError(
-            f"volume must be 3D (Z, Y, X), got shape {volume.shape}; "
+            f"volume must be 3D (Z, Y, X), or RGB (Z, Y, X, 3), got shape {volume.shape}; "
             "for a single 2D slice pass volume[np.newaxis]"
         )
     if volume.size == 0:
@@ -500,9 +502,9 @@ def save_volume(
     unit: str = "um",
     metadata: dict | None = None,
 ) -> pathlib.Path:
-    """Write a ``(Z, Y, X)`` volume to ``.tif``/``.tiff``, ``.ome.tif``/``.ome.tiff`` or
-    ``.npy``, a plane at a time (a memory-mapped volume larger than memory is written without
-    a whole copy).
+    """Write a ``(Z, Y, X)`` volume, or an RGB one ``(Z, Y, X, 3)``, to ``.tif``/``.tiff``,
+    ``.ome.tif``/``.ome.tiff`` or ``.npy``, a plane at a time (a memory-mapped volume larger
+    than memory is written without a whole copy).
 
     Parameters
     ----------
@@ -512,7 +514,7 @@ def save_volume(
         a temporary name in its folder and renamed when complete: a write that fails
         (a full disk) leaves what was at *path* before, never part of the volume.
     volume : numpy.ndarray
-        3D array ``(Z, Y, X)`` of integers, floats or bools.
+        3D array ``(Z, Y, X)`` of integers, floats or bools, or ``(Z, Y, X, 3)`` RGB.
     voxel_size : float or tuple of 3 floats, optional
         Physical voxel size ``(z, y, x)``; a scalar means isotropic. TIFF only.
     unit : str, default "um"
@@ -546,6 +548,9 @@ def save_volume(
     :func:`load_volume` read whole and other TIFF readers see as its first
     plane; a :class:`~clsolid.LargeTiffWarning` says so.
 
+    RGB volumes are written with RGB photometric interpretation, axes ``ZYXS``: ImageJ's
+    TIFF holds them as 8-bit samples only (others are refused: write an ``.ome.tif``).
+
     OME-TIFF (a name ending in ``.ome.tif`` or ``.ome.tiff``, any case): the same sample
     types, one page a plane, and a BigTIFF when the samples pass 4 GiB, which every OME
     reader (Fiji's Bio-Formats, napari, tifffile, :func:`load_volume`) reads whole. The
@@ -571,6 +576,9 @@ def save_volume(
             _write_npy(tmp, vol, vol.dtype if narrowed is None else narrowed)
         return p
     dtype = _tiff_dtype(vol)
+    if vol.ndim == 4 and dtype != np.uint8 and not _is_ome(p):
+        raise InputError(f"{p.name}: ImageJ stores RGB as 8-bit samples only, and this volume's are {dtype}; "
+                         "write an .ome.tif or a .npy file")
     with replaced_atomically(p) as tmp:
         if _is_ome(p):
             _write_ome(tmp, vol, dtype, spacing, unit, meta_json)
@@ -597,26 +605,28 @@ def _write_ome(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spacing:
     """Write an OME-TIFF ZYX stack, a page a plane, written a plane at a time: a BigTIFF when
     its samples pass 4 GiB, which every OME reader (Fiji's Bio-Formats, napari, tifffile)
     reads whole. The calibration is OME's PhysicalSize; the metadata its image's Description."""
-    meta: dict[str, Any] = {"axes": "ZYX", "Name": _OME_NAME}
+    rgb = volume.ndim == 4
+    meta: dict[str, Any] = {"axes": "ZYXS" if rgb else "ZYX", "Name": _OME_NAME}
     if spacing is not None:  # unit: OME's symbol (_written_unit)
         for axis, size in zip("ZYX", spacing):
             meta.update({f"PhysicalSize{axis}": size, f"PhysicalSize{axis}Unit": unit})
     if meta_json is not None:
         meta["Description"] = meta_json
     big = volume.size * dtype.itemsize > _CLASSIC_TIFF_BYTES
-    # minisblack: else tifffile takes a last axis of 3 or 4 voxels for RGB(A) samples
+    # minisblack for grey: else tifffile takes a last axis of 3 or 4 voxels for RGB(A) samples
     tifffile.imwrite(path, _planes(volume, dtype), shape=volume.shape, dtype=dtype, ome=True, bigtiff=big,
-                     photometric="minisblack", metadata=meta)
+                     photometric="rgb" if rgb else "minisblack", metadata=meta)
 
 
 def _write_imagej(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spacing: tuple[float, float, float] | None,
                   unit: str, meta_json: str | None, shown: pathlib.Path | None = None) -> None:
     """Write an ImageJ ZYX hyperstack of *dtype* samples, with optional calibration and
     metadata, a plane at a time; a warning names the file *shown* (default *path*)."""
-    props = {_PROP_AXES: "ZYX"}
+    axes = "ZYXS" if volume.ndim == 4 else "ZYX"  # RGB: 8-bit samples (save_volume checks)
+    props = {_PROP_AXES: axes}
     if meta_json is not None:
         props[_PROP_METADATA] = meta_json
-    ij_meta: dict[str, Any] = {"axes": "ZYX", "Properties": props}
+    ij_meta: dict[str, Any] = {"axes": axes, "Properties": props}
     kwargs: dict[str, Any] = {}
     if spacing is not None:
         z, y, x = spacing
@@ -626,7 +636,7 @@ def _write_imagej(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype, spaci
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         tifffile.imwrite(path, _planes(volume, dtype), shape=volume.shape, dtype=dtype, imagej=True,
-                         metadata=ij_meta, **kwargs)
+                         metadata=ij_meta, photometric="rgb" if volume.ndim == 4 else None, **kwargs)
     for w in caught:  # tifffile's own note on the large-file form says nothing a user can act on
         if "truncating ImageJ file" in str(w.message):
             warnings.warn(LargeTiffWarning(
@@ -649,9 +659,9 @@ def load_volume(path: PathLike) -> tuple[np.ndarray, dict]:
     Returns
     -------
     array : numpy.ndarray
-        The data with its stored dtype: ``(Z, Y, X)`` for a stack, 2D for a
-        single image (a PNG is always one 2D slice). A one-slice volume
-        written by :func:`save_volume` reads back as ``(1, Y, X)``.
+        The data with its stored dtype: ``(Z, Y, X)`` for a stack (``(Z, Y, X, 3)`` for
+        an RGB one), 2D for a single image (a PNG is always one 2D slice). A one-slice
+        volume written by :func:`save_volume` reads back as ``(1, Y, X)``.
     info : dict
         ``'voxel_size'``: ``(z, y, x)`` floats when the TIFF carries ImageJ
         calibration (z is 1.0, ImageJ's default, when no spacing is recorded),

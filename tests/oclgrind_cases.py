@@ -112,9 +112,11 @@ def _ml_state(model, seed: int, sources: bool = False):
     return vol, temp, src, parent
 
 
-def _ml_backends(device: Device, shape, seed: int = 0, sources: bool = False, per_view: bool = False, **options):
+def _ml_backends(device: Device, shape, seed: int = 0, sources: bool = False, per_view: bool = False,
+                 colour: bool = False, **options):
     """The OpenCL and the reference back end started on one scale of *options*' model, one
-    state; with *per_view*, each view its own exemplar, of its own size."""
+    state; with *per_view*, each view its own exemplar, of its own size; with *colour*, the
+    labels an 8-colour palette's (each neighbour's three channels compared)."""
     from clsolid.ml.model import build_scale
     from clsolid.ml.opencl import CLBackend
     from clsolid.ml.params import MLParams
@@ -124,7 +126,8 @@ def _ml_backends(device: Device, shape, seed: int = 0, sources: bool = False, pe
     labels = _labels()
     if per_view:
         labels = {"front": labels, "right": labels.T[:10, :11].copy(), "top": labels[1:10, 2:11].copy()}
-    model = build_scale(labels, shape, params, 0)
+    palette = np.random.default_rng(5).uniform(0.0, 100.0, (int(labels.max()) + 1, 3)) if colour else None
+    model = build_scale(labels, shape, params, 0, palette)
     vol, temp, src, parent = _ml_state(model, seed, sources)
     backends = CLBackend(device, vector_width=VECTOR_WIDTH), ReferenceBackend()
     for b in backends:
@@ -132,13 +135,15 @@ def _ml_backends(device: Device, shape, seed: int = 0, sources: bool = False, pe
     return model, backends, (model.with_parent(vol, parent), model.with_parent(temp, np.zeros(temp.shape)))
 
 
-def _assert_lcpdfs_agree(device: Device, shape, sources: bool = False, per_view: bool = False, **options) -> None:
+def _assert_lcpdfs_agree(device: Device, shape, sources: bool = False, per_view: bool = False,
+                         colour: bool = False, **options) -> None:
     """The normalised log LCPDFs of one conflict-free set, kernels against the reference (the
     fast tests' tolerance), and the sources recorded on the way: sites as near as the
     reference's (on a tie, another site may be the one recorded)."""
     from clsolid.ml.reference import site_distances
 
-    model, (cl_b, ref), (vol, temp) = _ml_backends(device, shape, sources=sources, per_view=per_view, **options)
+    model, (cl_b, ref), (vol, temp) = _ml_backends(device, shape, sources=sources, per_view=per_view, colour=colour,
+                                                   **options)
     voxels = np.flatnonzero(model.colour.ravel() == 0)
     got, want = cl_b.lcpdf(voxels), ref.lcpdf(voxels)
     np.testing.assert_allclose(got, want, atol=2e-3 * max(1.0, np.abs(want).max() / 100))
@@ -170,22 +175,26 @@ def init(device: Device) -> None:
 @case
 def exact(device: Device) -> None:
     """parzen_groups and lcpdf: squared differences, phase mismatches and weighted ones, a
-    fall-off, parent terms, an exemplar per view (each view its own run of chunks)."""
+    fall-off, parent terms, an exemplar per view (each view its own run of chunks), colours
+    (each neighbour's channels, with parent terms)."""
     shape = (5, 6, 7)
     _assert_lcpdfs_agree(device, shape, neighborhood=5, views=3)
     _assert_lcpdfs_agree(device, shape, neighborhood=3, distance="mismatch", falloff=1.0)
     _assert_lcpdfs_agree(device, shape, neighborhood=3, views=3, distance="weighted")
     _assert_lcpdfs_agree(device, shape, neighborhood=3, scales=2, parent_weight=4.0, parent_min_side=0)
     _assert_lcpdfs_agree(device, shape, per_view=True, neighborhood=3, views=3)
+    _assert_lcpdfs_agree(device, shape, colour=True, neighborhood=3, views=3, scales=2, parent_weight=2.0,
+                         parent_min_side=0)
 
 
 @case
 def pruned(device: Device) -> None:
-    """parzen_candidates (with and without a sample), projected_nearest (every site, and lists
-    of sites) and prune_flags (hot and sourceless voxels sent to the exact sum)."""
+    """parzen_candidates (with and without a sample, and on colours), projected_nearest (every
+    site, and lists of sites) and prune_flags (hot and sourceless voxels sent to the exact sum)."""
     shape = (5, 6, 7)
     common = dict(neighborhood=3, likelihood="pruned", sources=True)
     _assert_lcpdfs_agree(device, shape, prune_similar=4, prune_sample=9, distance="weighted", **common)
+    _assert_lcpdfs_agree(device, shape, views=3, prune_similar=4, prune_sample=5, colour=True, **common)
     _assert_lcpdfs_agree(device, shape, views=3, prune_similar=4, prune_sample=0, prune_projected=4,
                          prune_projected_k=6, **common)
     _assert_lcpdfs_agree(device, shape, prune_similar=2, prune_sample=5, prune_projected=4, prune_projected_k=6,

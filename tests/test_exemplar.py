@@ -149,20 +149,46 @@ def test_load_npy(tmp_path, grey8):
     np.testing.assert_array_equal(out, grey8)
 
 
-def test_load_rgb_png_is_colour_error(tmp_path, grey8):
+def test_load_rgb_png_is_colour(tmp_path, grey8):
     path = tmp_path / "rgb.png"
-    Image.fromarray(np.dstack([grey8, grey8 // 2, grey8 // 3])).save(path)
-    with pytest.raises(InputError, match="colour") as info:
+    rgb = np.dstack([grey8, grey8 // 2, grey8 // 3])
+    Image.fromarray(rgb).save(path)
+    out = load_exemplar(path)
+    assert out.shape == rgb.shape and out.dtype == np.uint8
+    np.testing.assert_array_equal(out, rgb)
+
+
+def test_load_rgba_png_is_refused_with_what_to_do(tmp_path, grey8):
+    path = tmp_path / "rgba.png"
+    Image.fromarray(np.dstack([grey8, grey8 // 2, grey8 // 3, grey8])).save(path)
+    with pytest.raises(InputError, match=r"RGBA.*drop the alpha"):
         load_exemplar(path)
-    assert "exemplar" in str(info.value) and "rgb2gray" in str(info.value)
 
 
-def test_load_grey_palette_png_is_grey(tmp_path, grey8):
-    path = tmp_path / "pal.png"
-    Image.fromarray(grey8).convert("P").save(path)
+@pytest.mark.parametrize("mode", ["RGB", "P"])
+def test_a_grey_png_saved_as_rgb_or_a_palette_is_grey(tmp_path, grey8, mode):
+    path = tmp_path / f"grey-{mode}.png"
+    Image.fromarray(grey8).convert(mode).save(path)
     out = load_exemplar(path)
     assert out.ndim == 2
     np.testing.assert_array_equal(out, grey8)
+
+
+@pytest.mark.parametrize("axis", [-1, 0, 2])
+def test_channel_axis_puts_the_channels_last(grey8, axis):
+    rgb = np.dstack([grey8, 255 - grey8, grey8 // 2])
+    given = np.moveaxis(rgb, -1, axis)
+    np.testing.assert_array_equal(load_exemplar(given, channel_axis=axis), rgb)
+
+
+@pytest.mark.parametrize("array, axis, needle", [
+    (np.zeros((4, 5, 4)), -1, "RGBA"), (np.zeros((4, 5, 2)), -1, "2 channels"), (np.zeros((4, 5)), -1, "3 dimensions"),
+    (np.zeros((4, 5, 3)), 3, "3 dimensions"), (np.zeros((4, 5, 3)), 1.0, "integer"),
+    (np.zeros((4, 5, 3)), True, "integer"),
+])
+def test_bad_channel_axis_or_channels_are_refused(array, axis, needle):
+    with pytest.raises(InputError, match=needle):
+        load_exemplar(array, channel_axis=axis)
 
 
 def test_load_tiff_stack_is_volume_error(tmp_path):

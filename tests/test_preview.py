@@ -252,3 +252,19 @@ def test_cube_bad_input(kwargs, param):
     volume = args.pop("volume")
     with pytest.raises(InputError, match=param):
         render_cube(volume, **args)
+
+
+def test_a_colour_preview_shows_the_colours_as_they_are():
+    rng = np.random.default_rng(2)
+    exemplar = rng.integers(0, 256, (16, 16, 3)).astype(np.uint8)
+    volume = rng.integers(0, 256, (8, 10, 12, 3)).astype(np.uint8)
+    p = render_preview(exemplar, volume, depths={"front": 2, "right": 5, "top": 4})
+    assert p.image.ndim == 3 and p.image.shape[-1] == 3
+    for i, expected in ((0, exemplar), (1, volume[2]), (2, np.swapaxes(volume[:, :, 5], 0, 1)), (3, volume[:, 4])):
+        panel = _panel(p, i)
+        k = panel.shape[0] // expected.shape[0]
+        np.testing.assert_array_equal(panel[::k, ::k], expected)  # 8-bit colours unscaled
+    cube = render_cube(volume)
+    assert cube.ndim == 3 and cube.shape[-1] == 3
+    with pytest.raises(InputError, match="RGB"):
+        render_preview(exemplar[..., 0], volume)

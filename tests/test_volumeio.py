@@ -490,3 +490,27 @@ def test_a_write_that_fills_the_disk_leaves_what_was_there(tmp_path, full_disk, 
     with pytest.raises(OSError):
         save_volume(path, new, voxel_size=0.5)
     assert not list(tmp_path.iterdir())  # no file was there: none is
+
+
+@pytest.mark.parametrize("name", ["v.tif", "v.ome.tif", "v.npy"])
+@pytest.mark.parametrize("shape", [(3, 5, 6, 3), (1, 4, 5, 3)])
+def test_rgb_volumes_round_trip_with_their_calibration(tmp_path, name, shape):
+    vol = np.random.default_rng(0).integers(0, 256, shape).astype(np.uint8)
+    path = save_volume(tmp_path / name, vol, voxel_size=(2.0, 0.5, 0.5), metadata={"k": 1})
+    back, info = load_volume(path)
+    assert back.shape == shape and back.dtype == np.uint8
+    np.testing.assert_array_equal(back, vol)
+    if name != "v.npy":
+        import tifffile
+
+        with tifffile.TiffFile(path) as tif:
+            assert tif.pages[0].photometric == tifffile.PHOTOMETRIC.RGB and tif.series[0].axes.endswith("YXS")
+        assert info["voxel_size"] == pytest.approx((2.0, 0.5, 0.5)) and info["metadata"] == {"k": 1}
+
+
+def test_a_16_bit_rgb_volume_goes_to_ome_not_imagej(tmp_path):
+    vol = np.random.default_rng(1).integers(0, 65536, (2, 3, 4, 3)).astype(np.uint16)
+    np.testing.assert_array_equal(load_volume(save_volume(tmp_path / "v.ome.tif", vol))[0], vol)
+    with pytest.raises(InputError, match="8-bit samples only.*ome.tif"):
+        save_volume(tmp_path / "v.tif", vol)
+    assert not (tmp_path / "v.tif").exists()

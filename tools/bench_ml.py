@@ -10,6 +10,7 @@ reference. Timings only: nothing here asserts on speed.
     python tools/bench_ml.py --case a --device pocl --shape 64 64 64
     python tools/bench_ml.py --voxels-per-item 8      # OpenCL tuning, as synthesize(backend=...) takes it
     python tools/bench_ml.py --builds composite3 composite4   # the program's build, one exemplar after another
+    python tools/bench_ml.py --colour fur --max-sweeps 2 5    # the TIP paper's colour case, and on luminance
 
 Without tuning options it measures what synthesize() does by default.
 """
@@ -26,7 +27,8 @@ import numpy as np
 import clsolid
 from clsolid.ml.opencl import CLBackend
 from clsolid.exemplar import builtin_exemplar, level_map, quantise
-from clsolid.gallery import gallery_exemplar
+from clsolid.colour import luminance
+from clsolid.gallery import colour_names, gallery_exemplar
 from clsolid.ml.model import build_scale
 from clsolid.core.slices import inserted_depths, seam_ratio
 from clsolid.ml.params import DEFAULT_BANDWIDTH_FACTOR, MLParams
@@ -136,6 +138,47 @@ def print_header(device, tuning: dict) -> float:
     return ref
 
 
+#: The TIP paper's colour case (Urs et al., TIP 2014, §V): 64^2 colour -> 64^3, an 11x11 window,
+#: 3 scales, simulated annealing.
+COLOUR_CASE = dict(neighborhood=11, scales=3, relaxation="annealing")
+
+
+def colour_quality(result) -> str:
+    """The worst view's joint colour-histogram, patch and autocorrelation scores of a colour result."""
+    from clsolid import metrics
+
+    report = metrics.evaluate(result.exemplar, result.volume, reference_repeats=3, rng=0)
+    worst = {}
+    for row in report["summary"]:
+        if row["score"] is not None:
+            worst[row["metric"]] = max(worst.get(row["metric"], -np.inf), row["score"])
+    return ", ".join(f"{k} {worst[k]:.2f}" for k in ("colour_histogram_kl", "patch_sw", "autocorrelation_l2")
+                     if k in worst)
+
+
+def colour_case(device, name: str, shape, seed: int, sweeps: list[int]) -> None:
+    """The colour case on gallery exemplar *name*, end to end at the defaults' stop rule and at
+    each of *sweeps* most sweeps a scale; then the same on the exemplar's luminance (grey)."""
+    rgb = gallery_exemplar(name, 64)
+    grey = np.clip(np.rint(luminance(rgb)), 0, 255).astype(np.uint8)
+    print(f"\n== colour case: {name} 64x64 RGB -> {shape}, 11x11, 3 scales, annealing, 32 colours (TIP 2014, §V)")
+    runs = {}
+    for most in [None, *sweeps]:
+        extra = {} if most is None else {"max_sweeps": most}
+        r = clsolid.synthesize(rgb, shape, channel_axis=-1, rng=seed, device=device, full_output=True,
+                               **COLOUR_CASE, **extra)
+        runs[most] = r
+        label = "the stop rule" if most is None else f"at most {most} sweeps a scale"
+        print_timings(f"colour, {label}", r.timings)
+        print(f"    quality (worst view): {colour_quality(r)}")
+    colour = runs[None]
+    same = colour.params["likelihood"]
+    for label, extra in (("its defaults", {}), (f"the colour run's {same} sum", {"likelihood": same})):
+        g = clsolid.synthesize(grey, shape, rng=seed, device=device, full_output=True, **COLOUR_CASE, **extra)
+        print_timings(f"grey, the exemplar's luminance, {label} ({g.params['likelihood']})", g.timings)
+        print(f"  joint colour costs {colour.timings['total_s'] / g.timings['total_s']:.2f} x grey at {label}")
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--case", choices=["a", "b", "both"], default="both")
@@ -152,7 +195,16 @@ def main(argv=None) -> None:
     ap.add_argument("--builds", nargs="+", metavar="NAME", default=None,
                     help="only time getting the likelihood program (a build, or a find in the cache) for each of "
                          "these 64x64 gallery exemplars in turn, in one process, PoCL's disk cache fresh")
+    ap.add_argument("--colour", choices=colour_names(), default=None, metavar="NAME",
+                    help=f"only the colour case, on this colour gallery exemplar ({', '.join(colour_names())})")
+    ap.add_argument("--max-sweeps", nargs="*", type=int, default=[], metavar="N",
+                    help="the colour case also with at most N sweeps a scale (quality against sweeps)")
     args = ap.parse_args(argv)
+    if args.colour:
+        device = clsolid.select_device(args.device)
+        print_header(device, {})
+        colour_case(device, args.colour, tuple(args.shape), args.seed, args.max_sweeps)
+        return
     tuning = {name: value for name, value in (("voxels_per_item", args.voxels_per_item),
                                               ("vector_width", args.vector_width)) if value is not None}
     if args.builds:  # PoCL's disk cache fresh, before the runtime starts: an earlier run's build would not count

@@ -16,6 +16,7 @@ are counted both on those worst cells and seed by seed.
 
     python tools/gallery.py -o out/gallery                        # every exemplar, 64^2 -> 48^3
     python tools/gallery.py --names porous50 hrtem --size 128 --shape 64 -o out/g128
+    python tools/gallery.py --names wood tabletop fur stained -o out/colour   # the colour gallery (ml)
     python tools/gallery.py --seeds 1 2 --set neighborhood=7 --set views=2 -o out/g7
     python tools/gallery.py --merge out/a/gallery.json out/b/gallery.json -o out/ab   # runs split by exemplar or seed
     python tools/gallery.py --compare out/a/gallery.json out/b/gallery.json -o out/ab  # before -> after, every view
@@ -36,7 +37,8 @@ from PIL import Image
 import clsolid
 from clsolid import metrics
 from clsolid.exemplar import nearest_level_index
-from clsolid.gallery import MAX_SIZE, SIZES, gallery_exemplar, gallery_info, gallery_names
+from clsolid.colour import luminance
+from clsolid.gallery import MAX_SIZE, SIZES, colour_names, gallery_exemplar, gallery_info, gallery_names
 from clsolid.metrics._common import jsonable
 from clsolid.metrics.symmetry import AXIS_PAIRS
 from clsolid.core.views import view_set
@@ -48,7 +50,7 @@ from quality_ml import parse_setting  # beside this script (tools/ is on the pat
 VIEWS = metrics.VIEWS
 #: The calibrated scores reported per view: (key in clsolid.metrics.evaluate, column title).
 SCORES = (("histogram_kl", "hist"), ("patch_sw", "patch"), ("autocorrelation_l2", "autocorr"), ("s2_l2", "S2"),
-          ("c2_l2", "C2"))
+          ("c2_l2", "C2"), ("colour_histogram_kl", "colour"))
 #: The gallery's targets: (key, label, limit, whether the value must stay strictly below it).
 TARGETS = (
     ("phase_error_pp", "every phase within 3 pp", 3.0, False),
@@ -57,6 +59,7 @@ TARGETS = (
     ("autocorrelation_l2", "autocorrelation <= 0.3", 0.3, False),
     ("mirror", "mirror <= 0.1", 0.1, False),
     ("copy", "no slice >= 90 % copied", 0.9, True),
+    ("colour_histogram_kl", "joint colour histogram <= 0.1", 0.1, False),
 )
 #: A method's own stricter targets, counted beside :data:`TARGETS`: `kopf`'s histogram
 #: re-weighting is to keep the phases within 2 points and the histogram within 0.05.
@@ -109,28 +112,40 @@ def isolated(res: Any, categorical: bool) -> dict[str, float]:
     if categorical:
         vol, ex = level_indices(res)
         in_volume, in_exemplar = metrics.isolated_fraction(vol, periodic=True), metrics.isolated_fraction(ex)
-    else:  # the exemplar as the engine saw it (level means), like the volume
-        in_volume = metrics.isolated_contrast_fraction(res.volume, res.exemplar, periodic=True)
-        in_exemplar = metrics.isolated_contrast_fraction(res.exemplar, res.exemplar)
+    else:  # the exemplar as the engine saw it (level means, palette colours), like the volume
+        vol, ex = _grey(res.volume), _grey(res.exemplar)
+        in_volume = metrics.isolated_contrast_fraction(vol, ex, periodic=True)
+        in_exemplar = metrics.isolated_contrast_fraction(ex, ex)
     return {"volume": in_volume, "exemplar": in_exemplar,
             "ratio": in_volume / max(in_exemplar, 1.0 / np.size(res.exemplar))}
 
 
+def _grey(values: np.ndarray) -> np.ndarray:
+    """A colour image or volume's luminance; a grey one as it is."""
+    return luminance(values) if values.shape[-1:] == (3,) and values.ndim in (3, 4) else values
+
+
 def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
-    """Every number of the gallery for one synthesis result (phase fractions if ``categorical``)."""
+    """Every number of the gallery for one synthesis result (phase fractions if ``categorical``).
+    A colour result is evaluated in its colours (structure on luminance, and the joint colour
+    histogram); its mirror, stretch and traces on luminance, its copies on palette indices."""
     params = res.params
     vol, ex = level_indices(res)
     constrained = view_set(params["views"])
-    slices = inserted_slices(res.params, res.volume.shape)  # the +in (or anchor) slices of every view
-    report = metrics.evaluate(ex, vol, views=VIEWS, constrained=constrained,  # +in copies would flatter
+    slices = inserted_slices(res.params, res.volume.shape[:3])  # the +in (or anchor) slices of every view
+    colour = res.volume.ndim == 4
+    report = metrics.evaluate(res.exemplar if colour else ex, res.volume if colour else vol, views=VIEWS,
+                              constrained=constrained,  # +in copies would flatter
                               reference_repeats=REFERENCE_REPEATS, rng=0, exclude=slices)
+    if colour:  # the structure's measures on luminance
+        vol, ex = _grey(res.volume), _grey(res.exemplar)
     scores = {v: {key: None for key, _ in SCORES} for v in VIEWS}
     for row in report["summary"]:
         if row["metric"] in scores[row["view"]]:
             scores[row["view"]][row["metric"]] = row["score"]
     pairs = [(0, 2)] if params["views"] == 2 else AXIS_PAIRS
     mirror = metrics.mirror_correlations(vol, pairs)
-    copy = metrics.max_copy_fraction(vol, ex, VIEWS)
+    copy = metrics.max_copy_fraction(*(level_indices(res) if colour else (vol, ex)), VIEWS)
     stretch = metrics.stretch(ex, vol, constrained)
     out: dict[str, Any] = {
         "seconds": seconds, "constrained": list(constrained), "scores": scores,
@@ -138,7 +153,8 @@ def measure(res: Any, seconds: float, categorical: bool) -> dict[str, Any]:
         "mirror_chance": metrics.mirror_chance(ex, min(vol.shape)),
         "stretch": stretch, "stretch_max": _farthest_from_one(stretch.values()),
         "copy": {"fraction": copy.fraction, "view": copy.view, "index": copy.index, "shift": list(copy.shift),
-                 "inserted": bool(copy.index in slices[copy.view]), "chance": copy_chance(ex, min(vol.shape))},
+                 "inserted": bool(copy.index in slices[copy.view]),
+                 "chance": copy_chance(res.exemplar_labels if colour else ex, min(vol.shape))},
         "inserted_depths": {v: d.tolist() for v, d in slices.items()},
         "isolated": isolated(res, categorical),
         "traces": metrics.slice_traces(vol, slices, exemplar=ex, categorical=categorical)["outside"],
@@ -159,7 +175,7 @@ def run_one(name: str, size: int, shape: int, seed: int, method: str, options: d
     image = gallery_exemplar(name, size)
     t = time.perf_counter()
     res = clsolid.synthesize(image, (shape,) * 3, method=method, rng=seed, device=device, full_output=True,
-                             **options)
+                             channel_axis=-1 if image.ndim == 3 else None, **options)
     seconds = time.perf_counter() - t
     categorical = gallery_info(name).kind == "categorical"
     return {"name": name, "seed": seed, **measure(res, seconds, categorical)}, res
@@ -239,8 +255,10 @@ def target_counts(rows: dict[str, dict], method: str = "ml") -> list[tuple[str, 
     for key, label, limit, strict in TARGETS + METHOD_TARGETS.get(method, ()) + YARDSTICKS:
         verdicts = [meets(row, key, limit, strict) for row in rows.values()]
         judged = [v for v in verdicts if v is not None]
+        if key == "colour_histogram_kl" and not judged:  # a gallery without colour exemplars
+            continue
         left = len(verdicts) - len(judged)
-        why = "grey, not applicable" if key == "phase_error_pp" else "not measurable"
+        why = "not segmented, not applicable" if key == "phase_error_pp" else "not measurable"
         out.append((label, f"{sum(judged)}/{len(judged)}", f" ({left} {why})" if left else ""))
     return out
 
@@ -254,7 +272,8 @@ def markdown(rows: dict[str, dict], settings: dict, runs: dict[str, list[dict]] 
         f"device {settings['device']}.",
         "",
         "Scores (F/R/T = front/right/top view): 0 = as close as two halves of the exemplar, 1 = no "
-        "structure; – = not measurable for this exemplar; each on 16 slices of its view away from "
+        "structure; – = not measurable for this exemplar (colour: the joint colour histogram of a colour "
+        "exemplar, whose other scores are its luminance's); each on 16 slices of its view away from "
         "the view's +in (or anchor) slices, which start as exemplar copies. Phase err: largest phase-fraction error, "
         "percentage points. Mirror: correlation with the x↔z mirror after removing each y-plane's "
         "mean (the largest over axis pairs with 3 views), and in brackets the level an isotropic "
@@ -278,7 +297,7 @@ def markdown(rows: dict[str, dict], settings: dict, runs: dict[str, list[dict]] 
     ]
     for name, row in rows.items():
         info = gallery_info(name)
-        kind = f"{len(info.phases)} phases" if info.kind == "categorical" else "grey"
+        kind = f"{len(info.phases)} phases" if info.kind == "categorical" else info.kind
         cells = ["/".join(_fmt(row["scores"][v][key]) for v in VIEWS) for key, _ in SCORES]
         c = row["copy"]
         copy = (f"{c['fraction']:.2f} {c['view'][0].upper()}{c['index']}{' +in' if c['inserted'] else ''} "
@@ -301,9 +320,13 @@ def markdown(rows: dict[str, dict], settings: dict, runs: dict[str, list[dict]] 
 
 
 def montage(path: Path, rows: list[np.ndarray]) -> None:
-    """Stack the previews of the exemplars (one row each), left-aligned on white."""
+    """Stack the previews of the exemplars (one row each), left-aligned on white (in colour
+    where any is)."""
+    if any(r.ndim == 3 for r in rows):
+        rows = [r if r.ndim == 3 else np.repeat(r[..., None], 3, axis=2) for r in rows]
     width = max(r.shape[1] for r in rows)
-    padded = [np.pad(r, ((0, 0), (0, width - r.shape[1])), constant_values=255) for r in rows]
+    padded = [np.pad(r, ((0, 0), (0, width - r.shape[1])) + ((0, 0),) * (r.ndim - 2), constant_values=255)
+              for r in rows]
     Image.fromarray(np.vstack(padded)).save(path, format="PNG")
 
 
@@ -312,7 +335,8 @@ def montage_row(name: str, res: Any) -> np.ndarray:
     anchor) slices."""
     params = slice_plan(res.params)
     ml = res.params["method"] == "ml"  # a search method's volume holds values, not level indices
-    exemplar, volume = (res.exemplar_labels, res.labels) if ml else (res.exemplar, res.volume)
+    colour = res.volume.ndim == 4  # shown in its colours
+    exemplar, volume = (res.exemplar_labels, res.labels) if ml and not colour else (res.exemplar, res.volume)
     return render_preview(exemplar, volume, depths=preview_depths(volume.shape, params),
                           constrained=params.view_names, name=name, min_side=PANEL_MIN).image
 
@@ -413,7 +437,7 @@ def compare_markdown(before: dict, after: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--names", nargs="+", choices=gallery_names(), default=list(gallery_names()),
+    ap.add_argument("--names", nargs="+", choices=gallery_names() + colour_names(), default=list(gallery_names()),
                     metavar="NAME", help=f"exemplars (default: all of {', '.join(gallery_names())})")
     ap.add_argument("--size", type=int, choices=(*SIZES, MAX_SIZE), default=64,
                     help=f"exemplar side (default 64; the gallery is meant at {SIZES})")

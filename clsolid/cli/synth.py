@@ -416,15 +416,17 @@ def run_synth(given: dict[str, Any]) -> int:
         if cmd.resume is not None:
             result = resume(cmd.resume, device=cmd.device, backend=options, progress=report, full_output=True)
         else:
+            colour = any(im.ndim == 3 for im in (image.values() if isinstance(image, dict) else [image]))
             result = synthesize(image, cmd.shape, method=cmd.method, rng=cmd.seed, device=cmd.device,
                                 backend=options, progress=report, full_output=True,
-                                site_map=cmd.site_map is not None, **settings.method_options)
+                                site_map=cmd.site_map is not None, channel_axis=-1 if colour else None,
+                                **settings.method_options)
     kind = "indices" if cmd.indices else "values"
     volume = result.labels if cmd.indices else result.volume
     output = Path(cmd.output)
     try:
         written = save_volume(output, volume, voxel_size=voxel_size, unit=unit or "um",
-                              metadata={"seed": result.seed, "written": kind, "levels": int(result.level_values.size)})
+                              metadata={"seed": result.seed, "written": kind, "levels": len(result.level_values)})
     except OSError as exc:  # checked writable before the run: a full disk, a vanished mount
         try:
             rescued = _rescue(volume, result.seed)

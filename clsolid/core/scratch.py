@@ -74,10 +74,12 @@ class Scratch:
         out[...] = source
         return out
 
-    def apply(self, fn: Callable[..., np.ndarray], dtype: Any, *arrays: np.ndarray, kept: bool = False) -> np.ndarray:
+    def apply(self, fn: Callable[..., np.ndarray], dtype: Any, *arrays: np.ndarray, kept: bool = False,
+              trailing: tuple[int, ...] = ()) -> np.ndarray:
         """``fn(*arrays)`` as a new array of *dtype* (*kept*: as :meth:`empty`), computed a run
-        of planes (first axis) at a time, so that no whole temporary of ``fn``'s is made."""
-        out = self.empty(arrays[0].shape, dtype, kept)
+        of planes (first axis) at a time, so that no whole temporary of ``fn``'s is made; *fn*
+        may add *trailing* axes (a colour's channels)."""
+        out = self.empty(arrays[0].shape + tuple(trailing), dtype, kept)
         plane = max(1, int(np.prod(arrays[0].shape[1:])))
         run = max(1, _RUN_ELEMENTS // plane)
         for lo in range(0, arrays[0].shape[0], run):

@@ -34,9 +34,12 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
     exemplar : array_like, 2D, or dict
         The exemplar (at least 16 x 16; treated as non-periodic); or one per view, a dict
         ``{view: exemplar}`` as :func:`clsolid.synthesize` takes them: each view is then
-        compared with its own, and a view without one is left out.
+        compared with its own, and a view without one is left out. An RGB exemplar
+        ``(H, W, 3)`` goes with an RGB volume: every distance is then measured on
+        luminance, and each view adds the joint colour histogram's
+        (:mod:`clsolid.metrics.colour`) and each channel's (``colour_channels``).
     volume : array_like, (Z, Y, X)
-        The synthesised volume (every side at least 8).
+        The synthesised volume (every side at least 8); ``(Z, Y, X, 3)`` with an RGB exemplar.
     views : sequence of {"front", "right", "top"}
         Views to report (see :func:`view_slices` for their orientation).
     constrained : sequence of view names
@@ -86,6 +89,10 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
         return _evaluate_per_view(exemplar, volume, views=views, constrained=constrained, levels=levels,
                                   max_slices=max_slices, rng=rng, reference_repeats=reference_repeats,
                                   periodic=periodic, exclude=exclude)
+    if _rgb(exemplar) or _rgb(volume):
+        return _evaluate_colour(exemplar, volume, views=views, constrained=constrained, levels=levels,
+                                max_slices=max_slices, rng=rng, reference_repeats=reference_repeats,
+                                periodic=periodic, exclude=exclude)
     ex = as_image(exemplar, "exemplar", min_side=MIN_EXEMPLAR_SIDE)
     vol = as_volume(volume, "volume", min_side=MIN_VOLUME_SIDE)
     views = check_views(views, "views")
@@ -122,6 +129,50 @@ def evaluate(exemplar: Any, volume: Any, *, views: Any = VIEWS, constrained: Any
         "summary": _summary(report_views),
     }
     return jsonable(report)
+
+
+def _rgb(data: Any) -> bool:
+    """Whether *data* is an RGB image or volume (a last axis of 3 after a 2D or 3D grid)."""
+    shape = np.shape(data) if not isinstance(data, Mapping) else ()
+    return len(shape) in (3, 4) and shape[-1] == 3 and (len(shape) == 4 or min(shape[:2]) > 3)
+
+
+def _evaluate_colour(exemplar: Any, volume: Any, **kw: Any) -> dict[str, Any]:
+    """:func:`evaluate` of an RGB volume against an RGB exemplar: every distance on
+    luminance, and each view's colour distances (:func:`clsolid.metrics.colour.colour_distances`)."""
+    from ..colour import luminance
+    from .colour import KEY, colour_distances
+
+    ex, vol = np.asarray(exemplar), np.asarray(volume)
+    if not (ex.ndim == 3 and ex.shape[-1] == 3 and vol.ndim == 4 and vol.shape[-1] == 3):
+        raise InputError(f"an RGB exemplar goes with an RGB volume, and a grey one with a grey one; got exemplar "
+                         f"{ex.shape} and volume {vol.shape}")
+    report = evaluate(luminance(ex), luminance(vol), **kw)
+    stacks = {}
+    for view, rep in report["views"].items():
+        axis = {"front": 0, "right": 2, "top": 1}[view]
+        stacks[view] = np.stack([view_slices(vol[..., c], view, None)[_positions(vol.shape[axis], rep)]
+                                 for c in range(3)], axis=-1)
+    repeats = int(report["settings"]["reference_repeats"])
+    joint, channels = colour_distances(ex, stacks, np.random.default_rng(kw.get("rng")), repeats)
+    for view, rep in report["views"].items():
+        rep["distances"][KEY] = jsonable(joint[view])
+        rep["colour_channels"] = jsonable(channels[view])
+    report["summary"] = _summary(report["views"])
+    report["settings"]["colour"] = {
+        "structure": "every other distance on luminance, 0.2126 R + 0.7152 G + 0.0722 B",
+        "joint_histogram": "each pixel as the nearest (CIELAB) of the exemplar's palette of at most 32 colours "
+                           "(k-means in CIELAB); symmetric KL, nats; ceiling: uniform noise in the RGB cube",
+        "channel_histograms": "32 bins over each channel's full range; symmetric KL, nats"}
+    report["exemplar"]["channels"] = 3
+    report["volume"] = {"shape": list(vol.shape), "dtype": str(vol.dtype)}
+    return report
+
+
+def _positions(n: int, rep: dict) -> np.ndarray:
+    """The slice indices a view's report used, as positions along its axis of *n*."""
+    idx = np.asarray(rep["slice_indices"], dtype=np.intp)
+    return idx if idx.size else np.arange(n)
 
 
 def _evaluate_per_view(exemplars: Mapping[str, Any], volume: Any, *, views: Any, **kw: Any) -> dict[str, Any]:

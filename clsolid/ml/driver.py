@@ -275,9 +275,11 @@ def run_ml(
     progress: Callable[[SweepInfo], None] | None = None,
     checkpoint: Any = None,
     resume: RunState | None = None,
+    palette: np.ndarray | None = None,
 ) -> tuple[np.ndarray, dict, list[float]]:
     """Run the multi-scale relaxation on quantised exemplar labels (one image, or one per view)
-    with a back end.
+    with a back end; a colour exemplar's labels with its *palette* ``(L, 3)`` in CIELAB
+    (``LevelMap.features``).
 
     Each sweep draws its random numbers from Philox keyed by *seed*, counter (x, y, z,
     :func:`clsolid.core.philox.relax_tag` (level, sweep)). Under ``relaxation="annealing"``
@@ -304,7 +306,7 @@ def run_ml(
                         else labels_img.shape, params)
     scratch = backend.scratch or Scratch()  # a tiled back end's, where it keeps the state
     levels = list(range(params.scales - 1, -1, -1))
-    models = [build_scale(labels_img, shape, params, lv) for lv in levels]
+    models = [build_scale(labels_img, shape, params, lv, palette) for lv in levels]
     backend.prepare(models, params)  # refuses, before allocating, what the device cannot hold
     clock = _Clock(models, params)
     base = backend.init_volume(shape, seed, models[0].pixels)

@@ -107,10 +107,16 @@ def exemplar_tables(exemplar: np.ndarray, half: int) -> tuple[np.ndarray, np.nda
     return flat[:, centre].copy(), np.delete(flat, centre, axis=1).T.copy()
 
 
-def difference(a: np.ndarray, b: np.ndarray, mismatch: bool, costs: np.ndarray | None = None) -> np.ndarray:
+def difference(a: np.ndarray, b: np.ndarray, mismatch: bool, costs: np.ndarray | None = None,
+               palette: np.ndarray | None = None) -> np.ndarray:
     """The per-value distance of the Parzen estimate, float64: ``(a - b)^2``, or ``[a != b]``
-    with *mismatch*, or with *costs* (labels 0..L-1) ``[a != b] (costs[a] + costs[b])``
-    (broadcast like ``a - b``)."""
+    with *mismatch*, or with *costs* (labels 0..L-1) ``[a != b] (costs[a] + costs[b])``, or
+    with a colour *palette* ``(L, C)`` (labels 0..L-1) the squared distance between the two
+    labels' colours ``|palette[a] - palette[b]|^2`` (broadcast like ``a - b``)."""
+    if palette is not None and not mismatch:
+        pa = palette[np.asarray(a).astype(np.intp)]
+        pb = palette[np.asarray(b).astype(np.intp)]
+        return np.sum((pa - pb) ** 2, axis=-1)
     a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
     if costs is not None:
         c = np.asarray(costs, np.float64)
@@ -220,7 +226,8 @@ def nearest_label(values: np.ndarray, labels: np.ndarray) -> np.ndarray:
     return np.where(values - labels[lo] <= labels[hi] - values, labels[lo], labels[hi])
 
 
-def scale_exemplar(labels_img: np.ndarray, level: int, pyramid: str = "binomial", phases: bool = False) -> np.ndarray:
+def scale_exemplar(labels_img: np.ndarray, level: int, pyramid: str = "binomial", phases: bool = False,
+                   palette: np.ndarray | None = None) -> np.ndarray:
     """The exemplar of scale *level*, ``ceil(H / 2^level) x ceil(W / 2^level)``
     (Urs thesis, §4.2.4, §4.3.1).
 
@@ -231,10 +238,19 @@ def scale_exemplar(labels_img: np.ndarray, level: int, pyramid: str = "binomial"
     ``distance="mismatch"`` and ``"weighted"``) each level's indicator is smoothed instead, and each pixel
     takes the level of the largest (the lowest on a tie): averaging phases' values would
     invent a phase where two others meet (matrix 0 beside particle 2 is not phase 1). On
-    two levels both round alike.
+    two levels both round alike. With a colour *palette* ``(L, C)`` (and not *phases*) each
+    of the labels' colour channels is smoothed, and each pixel takes the label of the nearest
+    palette colour, as a grey pixel the nearest level.
     """
     if pyramid == "decimate" or level == 0:
         return labels_img[:: 2**level, :: 2**level]
+    if palette is not None and not phases:
+        channels = [palette[labels_img.astype(np.intp), c] for c in range(palette.shape[1])]
+        for _ in range(level):
+            channels = [_binomial_halve(ch) for ch in channels]
+        smooth = np.stack(channels, axis=-1)
+        d = np.sum((smooth[:, :, None, :] - palette[None, None, :, :]) ** 2, axis=-1)
+        return np.argmin(d, axis=-1).astype(labels_img.dtype)
     if phases:
         values = np.unique(labels_img)
         share = []
@@ -276,6 +292,16 @@ class ScaleModel:
     term_weight: np.ndarray | None = None  # (R,) each term's weight: the fall-off's, the parent_weight
     parent_rows: int = 0  # the last rows of offsets and patches: the parent square's (parent_offsets), or none
     view_sites: tuple[int, ...] | None = None  # per-view exemplars: view v's sites are [v_sites[v], v_sites[v+1])
+    palette: np.ndarray | None = None  # (L, C) a colour exemplar's labels in CIELAB, with the squared distance
+
+    @property
+    def channels(self) -> int:
+        """Values compared per neighbour: a colour's channels (:attr:`palette`), else 1."""
+        return 1 if self.palette is None or self.mismatch else self.palette.shape[1]
+
+    def distance(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """The distance between labels (or values) *a* and *b* this scale sums (:func:`difference`)."""
+        return difference(a, b, self.mismatch, self.costs, self.palette)
 
     @property
     def per_view(self) -> bool:
@@ -295,7 +321,12 @@ class ScaleModel:
 
     def coded(self, values: np.ndarray) -> np.ndarray:
         """Label *values* as the kernels compare them: themselves, or with :attr:`costs` their
-        costs (float32), so that a mismatch's cost is the sum of the two codes."""
+        costs (float32), so that a mismatch's cost is the sum of the two codes. Colour
+        (:attr:`channels` > 1): terms ``(R, n)`` become ``(R * C, n)``, term r's channel c in
+        row ``r * C + c``, so that a squared distance over rows is the colours' distance."""
+        if self.channels > 1:
+            rgb = self.palette[np.asarray(values).astype(np.intp)]  # (R, n, C)
+            return np.moveaxis(rgb, -1, 1).reshape(-1, rgb.shape[1])
         if self.costs is None:
             return values
         return self.costs[np.asarray(values).astype(np.intp)]
@@ -381,10 +412,12 @@ def _check_bandwidth(h: float, params: MLParams, level: int) -> None:
 
 
 def build_scale(
-    labels_img: np.ndarray | dict[str, np.ndarray], shape: tuple[int, int, int], params: MLParams, level: int
+    labels_img: np.ndarray | dict[str, np.ndarray], shape: tuple[int, int, int], params: MLParams, level: int,
+    palette: np.ndarray | None = None,
 ) -> ScaleModel:
     """Tables of scale *level* from the full-resolution exemplar labels (one image, or one per
-    view: their tables are then stacked view after view, :attr:`ScaleModel.view_sites`)."""
+    view: their tables are then stacked view after view, :attr:`ScaleModel.view_sites`); a
+    colour exemplar's labels with its *palette* ``(L, C)`` (``LevelMap.features``)."""
     half = params.neighborhood // 2
     mismatch = params.distance in ("mismatch", "weighted")  # "auto" unresolved (params.for_exemplar): squared
     per_view = isinstance(labels_img, dict)
@@ -397,11 +430,11 @@ def build_scale(
             raise InputError("distance='weighted' needs the labels 0..L-1 (as synthesize makes them)")
         costs = phase_costs(pool)
     own = images[:1] if not per_view else images  # each distinct exemplar once
-    scaled = [scale_exemplar(im, level, params.pyramid, phases=mismatch) for im in own]
+    scaled = [scale_exemplar(im, level, params.pyramid, phases=mismatch, palette=palette) for im in own]
     tables = [exemplar_tables(ex, half) for ex in scaled]
     coarse = [None] * len(own)
     if params.parent_weight and level < params.scales - 1:  # the coarsest scale has no parent
-        coarse = [scale_exemplar(im, level + 1, params.pyramid, phases=mismatch) for im in own]
+        coarse = [scale_exemplar(im, level + 1, params.pyramid, phases=mismatch, palette=palette) for im in own]
     # a small coarser exemplar's result is not to be trusted (params.PARENT_MIN_SIDE)
     with_parents = all(c is not None and min(c.shape) >= params.parent_min_side for c in coarse)
     if with_parents:
@@ -414,11 +447,20 @@ def build_scale(
         h = params.bandwidth[level]
     else:
         ex_pool = pooled(dict(enumerate(scaled))) if per_view else scaled[0]
-        sigma = phase_sigma(ex_pool, costs) if mismatch else float(ex_pool.std())
+        channels = 1
+        if mismatch:
+            sigma = phase_sigma(ex_pool, costs)
+        elif palette is not None:  # a colour's spread: the root of its channels' mean variance
+            channels = palette.shape[1]
+            sigma = float(np.sqrt(np.mean(np.var(palette[ex_pool.astype(np.intp)].reshape(-1, channels), axis=0))))
+        else:
+            sigma = float(ex_pool.std())
         # A constant exemplar has sigma = 0; any bandwidth gives the same (constant) result.
         factor = params.bandwidth_factor[level]
-        # per view: each view's sum runs over its own sites, so n is their mean count
-        h = silverman(sigma, int(round(np.mean(counts))), params.neighborhood**2) * factor if sigma > 0 else 1.0
+        # per view: each view's sum runs over its own sites, so n is their mean count; a colour
+        # window has C values a pixel, so C k^2 dimensions
+        n_mean = int(round(np.mean(counts)))
+        h = silverman(sigma, n_mean, channels * params.neighborhood**2) * factor if sigma > 0 else 1.0
     _check_bandwidth(h, params, level)
     offsets = np.stack([view_offsets(v, half) for v in params.view_names])
     union = np.unique(offsets.reshape(-1, 3), axis=0)  # the temperatures' neighbours: no parent terms
@@ -448,4 +490,5 @@ def build_scale(
         term_weight=weight,
         parent_rows=parents,
         view_sites=tuple(int(n) for n in np.cumsum([0] + counts)) if per_view else None,
+        palette=None if palette is None else np.asarray(palette, np.float64),
     )

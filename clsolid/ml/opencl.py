@@ -13,7 +13,7 @@ from ..core.launch import launch
 from ..balance import n_score_slots, score_stride
 from ..core.device import Device
 from ..errors import DeviceMemoryError, InputError
-from .model import ScaleModel, difference
+from .model import ScaleModel
 from .params import RELAXATIONS, MLParams
 from ..core.philox import TAG_INIT, sample_tag, seed_key
 from ..core.probe import VECTOR_WIDTHS, probe
@@ -145,7 +145,7 @@ class CLBackend:
         sizes = {
             "volume": model.state_blocks * n_vox * _F4,
             "temperature": model.state_blocks * n_vox * _F4,
-            "exemplar patches": chunks * nr * self.vw * _F4,
+            "exemplar patches": chunks * nr * model.channels * self.vw * _F4,
             "group log-sums": batch * views * self._pad(n_labels) * _F4,
             "voxel indices": batch * _F4,
             "packed state": batch * (2 + views) * _F4,
@@ -197,6 +197,7 @@ class CLBackend:
             **({"PROJ_K": p.prune_projected_k, "PROJ_D": projected.axes.shape[1],
                 "PROJ_P": max(p.prune_projected_probe, 1)} if projected is not None else {}),
             "MISMATCH": 2 if model.costs is not None else int(model.mismatch),
+            "NCH": model.channels,
             "TERM_WEIGHTS": int(model.term_weight is not None),
         })
 
@@ -298,10 +299,11 @@ class CLBackend:
         self.kern = self._buf(kernel_tables(model, gvals, self._pad(n_labels)))
         self.labels = self._buf(model.labels.astype(np.float32))
         self.offsets = self._buf(model.offsets.astype(np.int32))
-        # The window terms: offsets, each term's weight's square root and each label's cost (a
-        # placeholder where the model has none), in buffers so that one build serves every exemplar.
+        # The window terms: offsets, each term's weight's square root and each label's cost, or
+        # its colour's channels (a placeholder where the model has neither), in buffers so that
+        # one build serves every exemplar.
         roots = np.ones(1) if model.term_weight is None else np.sqrt(model.term_weight)
-        costs = np.zeros(1) if model.costs is None else model.costs
+        costs = model.palette if model.channels > 1 else np.zeros(1) if model.costs is None else model.costs
         self.terms = (self.offsets, self._buf(roots.astype(np.float32)), self._buf(costs.astype(np.float32)))
         self.union = self._buf(model.union_offsets.astype(np.int32))
         self.vox_buf = cl.Buffer(ctx, mf.READ_ONLY, batch * _F4)
@@ -355,9 +357,10 @@ class CLBackend:
         ns = pruning.params.n_similar  # the kernel reads NS columns: pad a small exemplar's table
         similar = np.concatenate([table.similar, np.repeat(table.similar[:, :1], ns - table.similar.shape[1], 1)], 1)
         group = np.searchsorted(gvals, model.centres[first].astype(np.float32)).astype(np.int32)
-        nr = model.patches.shape[0]
-        rows = np.zeros((first.size, -(-nr // 8) * 8), np.float32)  # whole float8 vectors, zero-padded
-        rows[:, :nr] = model.coded(model.patches).T[first]
+        coded = model.coded(model.patches).T[first]  # a colour's: every neighbour's channels
+        nt = coded.shape[1]
+        rows = np.zeros((first.size, -(-nt // 8) * 8), np.float32)  # whole float8 vectors, zero-padded
+        rows[:, :nt] = coded
         self.coherence = (self._buf(pruning.voxel_offsets), self._buf(pruning.exemplar_offsets))
         self.windows = (self._buf(table.window_of), self._buf(similar.astype(np.int32)),
                         self._buf(rows), self._buf(group),
@@ -563,8 +566,8 @@ def kernel_tables(model: ScaleModel, group_values: np.ndarray, width: int) -> np
     factor ``L = -difference(value, label) / (2 h^2)`` of every (group value, label) pair, label rows
     padded to *width* with 1 and 0 (a padding lane then never looks underflowed)."""
     table = np.zeros((2, group_values.size, width))
-    table[1, :, : model.labels.size] = -difference(group_values[:, None], model.labels[None, :], model.mismatch,
-                                                   model.costs) / (2.0 * model.bandwidth**2)
+    table[1, :, : model.labels.size] = -model.distance(group_values[:, None], model.labels[None, :]) / (
+        2.0 * model.bandwidth**2)
     table[0] = np.exp(table[1])
     return table.astype(np.float32)
 
@@ -574,7 +577,7 @@ def _pruned_sizes(model: ScaleModel, params: MLParams, batch: int) -> dict[str, 
     site's window taken as distinct, as many site lists as :func:`~clsolid.ml.pruned.n_site_lists` asks for."""
     views, nr = model.offsets.shape[:2]
     n = model.n_sites
-    sizes = {"pruned windows": n * -(-nr // 8) * 8 * _F4,
+    sizes = {"pruned windows": n * -(-nr * model.channels // 8) * 8 * _F4,
              # window_of, similar, group, log count, source
              "pruned window tables": n * (params.n_similar + 4) * _F4,
              "pruned flags": batch * _F4}

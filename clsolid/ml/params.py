@@ -279,7 +279,8 @@ class MLParams:
         return tuple(float(v) for v in values)
 
     def for_exemplar(self, n_levels: int, categorical: bool, seam_ratio: float = 0.0,
-                     shape: tuple[int, int] | None = None, per_view: bool = False) -> "MLParams":
+                     shape: tuple[int, int] | None = None, per_view: bool = False,
+                     colour: bool = False) -> "MLParams":
         """These parameters with every option left to the exemplar (None, ``"auto"``) decided.
 
         Parameters
@@ -295,6 +296,10 @@ class MLParams:
         per_view : bool
             Whether each view has its own exemplar: the exact sum then (the pruned one follows
             sources within one exemplar), and ``likelihood="pruned"`` is refused.
+        colour : bool
+            Whether the labels are a colour exemplar's palette: compared by their colours
+            (``distance="squared"``), the pruned sum at every size, without projected
+            candidates; compared as phases, as any labels.
 
         Returns
         -------
@@ -303,18 +308,19 @@ class MLParams:
         phases = is_categorical(n_levels, categorical)
         k = self.neighborhood
         large = shape is not None and math.prod(window_grid(shape, k)) >= AUTO_PROJECTED_SITES
+        # On two phases the weights are one constant: the plain count is the same distance.
+        counted = "weighted" if n_levels > 2 else "mismatch"
+        distance = (counted if phases else "squared") if self.distance == "auto" else self.distance
+        by_colour = colour and distance == "squared"
         likelihood = self.likelihood
         if per_view and likelihood == "pruned":
             raise InputError("likelihood='pruned' takes one exemplar; with an exemplar per view use "
                              "likelihood='exact' (or 'auto', which chooses it)")
-        if likelihood == "auto":
-            likelihood = "exact" if per_view else "pruned" if phases or large else "exact"
+        if likelihood == "auto":  # colours: three terms a neighbour, pruned at every size (docs/design.md#colour)
+            likelihood = "exact" if per_view else "pruned" if phases or large or by_colour else "exact"
         projected = self.prune_projected
-        if projected is None:
-            projected = AUTO_PROJECTED_AXES if likelihood == "pruned" and large and not phases else 0
-        # On two phases the weights are one constant: the plain count is the same distance.
-        counted = "weighted" if n_levels > 2 else "mismatch"
-        distance = (counted if phases else "squared") if self.distance == "auto" else self.distance
+        if projected is None:  # colours have no projection (clsolid.ml.pruned.ProjectedWindows)
+            projected = AUTO_PROJECTED_AXES if likelihood == "pruned" and large and not phases and not by_colour else 0
         spacing = self.insert_spacing
         if spacing is None:
             spacing = CATEGORICAL_INSERT_SPACING if phases else DEFAULT_INSERT_SPACING

@@ -221,7 +221,9 @@ def _coordinates(model: ScaleModel, neighbours: np.ndarray) -> np.ndarray:
     """Rows whose squared distances order *neighbours* ``(U, R)`` as the model's distance does:
     themselves, or with ``model.mismatch`` their one-hot codes (squared distance: 2 x mismatches),
     each label's scaled by the square root of its cost with ``model.costs`` (squared distance:
-    2 x the weighted mismatches)."""
+    2 x the weighted mismatches), or a colour's channels (:meth:`ScaleModel.coded`)."""
+    if model.channels > 1:
+        return model.coded(neighbours.T).T.astype(np.float64)
     if not model.mismatch:
         return neighbours
     scale = np.ones(model.labels.size) if model.costs is None else np.sqrt(model.costs.astype(np.float64))
@@ -403,9 +405,9 @@ class ProjectedWindows:
         """The first *dims* axes of *model*'s windows (all of them if it has fewer terms), and
         with *probe* > 0 the sites split into about sqrt(n) lists (:func:`site_lists`) of
         which a search reads the *probe* whose centres are nearest (0: one list, every site)."""
-        if model.mismatch:
-            raise InputError("prune_projected needs squared differences (distance='squared', a grey "
-                             "exemplar's default); phases compared as names have no projection")
+        if model.mismatch or model.channels > 1:
+            raise InputError("prune_projected needs squared differences of grey levels (distance='squared' on a "
+                             "grey exemplar); phases compared as names, and colours, have no projection")
         scale = np.ones(model.patches.shape[0]) if model.term_weight is None else np.sqrt(model.term_weight)
         windows = model.patches.T * scale
         mean, axes = principal_axes(windows, dims)

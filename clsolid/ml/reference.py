@@ -13,7 +13,7 @@ import numpy as np
 
 from ..balance import n_score_slots, score_stride
 from . import pruned
-from .model import ScaleModel, difference, wrapped_coords  # noqa: F401 (wrapped_coords: also this module's name)
+from .model import ScaleModel, wrapped_coords  # noqa: F401 (wrapped_coords: also this module's name)
 from ..core.philox import TAG_INIT, bounded, unit_float, voxel_uint32, voxel_words
 
 _CHUNK = 128  # voxels per vectorised step, to bound memory
@@ -43,8 +43,8 @@ def site_distances(model: ScaleModel, vol: np.ndarray, temp: np.ndarray, voxels:
     w = 1.0 - temp.ravel()[nb].astype(np.float64)
     if model.term_weight is not None:  # the fall-off: each term times its weight
         w = w * np.sqrt(model.term_weight)
-    if model.mismatch:
-        diff = difference(x[:, :, None], patches[None, :, :], True, model.costs)
+    if model.mismatch or model.channels > 1:  # a colour's: its labels' squared distance
+        diff = model.distance(x[:, :, None], patches[None, :, :])
         return np.sum((w**2)[:, :, None] * diff, axis=1)
     diff = w[:, :, None] * (x[:, :, None] - patches[None, :, :])  # (m, R, n)
     return np.sum(diff**2, axis=1)
@@ -61,8 +61,7 @@ def parzen(model: ScaleModel, a: np.ndarray, keep: np.ndarray | None = None, vie
     sites, or over those where *keep* ``(m, n)`` is True, or, if *keep* is a float array, with
     each site's term multiplied by it (0: left out)."""
     centres = model.centres[model.sites_of(view)]
-    dist = (difference(model.labels[None, :, None], centres[None, None, :], model.mismatch, model.costs)
-            + a[:, None, :])
+    dist = model.distance(model.labels[None, :, None], centres[None, None, :]) + a[:, None, :]
     logw = -dist / (2.0 * model.bandwidth**2)
     if keep is not None:
         with np.errstate(divide="ignore"):

@@ -31,6 +31,8 @@
  *   NS     windows per source in the pruned sum's candidate sets (clsolid.ml.pruned)
  *   MISMATCH  0: values differ by (a - b)^2, 1: by [a != b], 2: by [a != b] (cost[a] + cost[b])
  *          (clsolid.ml.model.difference), the costs per label in the label_cost buffer
+ *   NCH    values compared per neighbour: 1, or a colour's channels (MISMATCH 0 only), each
+ *          label's colour then in label_cost [label][NCH]; a window has NT = NR * NCH terms
  *   TERM_WEIGHTS  1: term r of a window weighs term_root[r]^2 (fall-off, shared and parent
  *          weights; clsolid.ml.model.term_weights), 0: every term weighs 1
  *   PROJ_K, PROJ_D, PROJ_P  the projected candidates (pruned.cl), where there are any
@@ -181,6 +183,22 @@ inline uint4 whole_coords(int z, int y, int x, int oz, int oy, int ox, int GZ, i
 #define TERM_WEIGHT(root, wr, r) ((wr) * (root)[r])
 #else
 #define TERM_WEIGHT(root, wr, r) (wr)
+#endif
+
+#ifndef NCH
+#define NCH 1
+#endif
+#define NT (NR * NCH)   /* terms per window: each neighbour's NCH values */
+
+/* PAIRS(cost, x, wr, xw, w, r): neighbour r's NCH pairs into xw[r NCH + c], w[r NCH + c]: a
+ * colour's channels c (the label x's colour, cost[x NCH + c]), each squared difference then
+ * one term, so that a window's sum is the squared distance between colours (TIP 2014 §V). */
+#if NCH > 1
+#define PAIRS(cost, x, wr, xw, w, r) { \
+    __global const float *col_ = (cost) + (int)(x) * NCH; \
+    for (int c_ = 0; c_ < NCH; ++c_) { xw[(r) * NCH + c_] = (wr) * col_[c_]; w[(r) * NCH + c_] = (wr); } }
+#else
+#define PAIRS(cost, x, wr, xw, w, r) PAIR(cost, x, wr, xw[r], w[r])
 #endif
 
 #if MISMATCH == 2

@@ -16,7 +16,8 @@ inline void add_chunk(floatv a, float cmin, float k, float *gmin, float *gsum)
  *   log_sums[item][g] = log sum_{p : c_p = g} exp(-k * A_p),
  *   A_p = sum_r ((1 - t_r)(x_r - y_{p,r}))^2,       k = 1 / (2 h^2).
  * Exemplar sites are sorted by centre value and padded per group to whole vectors
- * (chunk_valid lanes are real); patches is laid out [chunk][r][VW]. Each group keeps a
+ * (chunk_valid lanes are real); patches is laid out [chunk][NT][VW] (term r of a colour's
+ * neighbour n, channel c at r = n NCH + c). Each group keeps a
  * running minimum of A and a sum rescaled to it (online log-sum-exp), so nothing
  * underflows whatever the window size or the number of grey levels.
  * src[view * n_vox + voxel] receives the voxel's source for the pruned likelihood: the site of
@@ -35,7 +36,7 @@ __kernel void parzen_groups(__constant const ml_scalars *P, int n_items,
                             __global const int *offsets,      /* [view][NR][3] */
                             __constant const float *term_root, __global const float *label_cost,
                             /* the exemplar's sites */
-                            __global const float *patches,    /* [chunk][NR][VW] */
+                            __global const float *patches,    /* [chunk][NT][VW] */
                             __global const int *chunk_group, __global const int *chunk_valid,
                             __global const int *chunk_site,   /* [chunk * VW + lane] */
                             __global const int *view_chunks)  /* [view][2]: first and end chunk */
@@ -48,14 +49,14 @@ __kernel void parzen_groups(__constant const ml_scalars *P, int n_items,
     const int c_begin = view_chunks[2 * view0], c_end = view_chunks[2 * view0 + 1];
     const float k = P->k;
 
-    float xw[VB][NR], w[VB][NR];
+    float xw[VB][NT], w[VB][NT];
     for (int b = 0; b < VB; ++b) {
         int item = min(first + b, n_items - 1);   /* spare slots repeat the last item */
         int voxel = voxels[item / n_views];
         __global const int *off = offsets + (item % n_views) * NR * 3;
         for (int r = 0; r < NR; ++r) {
             int j = neighbour(voxel, Y, X, Z, off + 3 * r) + PARENT(r, Z, Y, X);
-            PAIR(label_cost, vol[j], TERM_WEIGHT(term_root, 1.0f - temp[j], r), xw[b][r], w[b][r])
+            PAIRS(label_cost, vol[j], TERM_WEIGHT(term_root, 1.0f - temp[j], r), xw[b], w[b], r)
         }
     }
 
@@ -82,10 +83,10 @@ __kernel void parzen_groups(__constant const ml_scalars *P, int n_items,
     for (int c = c_begin; c < c_end; ++c) {
         /* Plain operators, not fma()/vload(): PoCL leaves those builtins as calls. The
          * chunk is 4*VW-byte aligned (buffers are, and chunks are whole vectors). */
-        __global const floatv *pc = (__global const floatv *)(patches + (size_t)c * NR * VW);
+        __global const floatv *pc = (__global const floatv *)(patches + (size_t)c * NT * VW);
         /* Named accumulators: an array here would live on the stack, not in registers. */
         floatv a0 = 0.0f, a1 = 0.0f, a2 = 0.0f, a3 = 0.0f, a4 = 0.0f, a5 = 0.0f, a6 = 0.0f, a7 = 0.0f;
-        for (int r = 0; r < NR; ++r) {
+        for (int r = 0; r < NT; ++r) {
             floatv p = pc[r];
 #define TERM(b, acc) ADD_TERM(floatv, acc, xw[b][r], w[b][r], p)
             TERM(0, a0)
@@ -117,9 +118,9 @@ __kernel void parzen_groups(__constant const ml_scalars *P, int n_items,
     /* The source: the least lane of the best chunk, recomputed (one chunk per item). */
     for (int b = 0; b < VB && first + b < n_items; ++b) {
         int c = best_chunk[b];
-        __global const floatv *pc = (__global const floatv *)(patches + (size_t)c * NR * VW);
+        __global const floatv *pc = (__global const floatv *)(patches + (size_t)c * NT * VW);
         floatv a = 0.0f;
-        for (int r = 0; r < NR; ++r) ADD_TERM(floatv, a, xw[b][r], w[b][r], pc[r])
+        for (int r = 0; r < NT; ++r) ADD_TERM(floatv, a, xw[b][r], w[b][r], pc[r])
         const float *as = (const float *)&a;
         int lane = 0;
         for (int l = 1; l < chunk_valid[c]; ++l)

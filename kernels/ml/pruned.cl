@@ -3,7 +3,7 @@
  * a projection) plus a sample of the other sites; and which voxels still need the exact sum.
  * Needs common.cl before it. */
 
-#define NRV ((NR + 7) / 8)   /* neighbours per pruned-sum row, in float8 vectors */
+#define NRV ((NT + 7) / 8)   /* terms per pruned-sum row (a colour's channels each one), in float8 vectors */
 /* A term below exp(UNSEEN) = 2.8e-8 of its group's largest is under half a float32 ulp of
  * the group's sum (at least 1), so adding it would leave the sum as it is: it is skipped. */
 #define UNSEEN (-17.4f)
@@ -103,7 +103,7 @@ __kernel void parzen_candidates(__constant const ml_scalars *P, int item0, int n
     __global const int *off = offsets + view * NR * 3;
     for (int r = 0; r < NR; ++r) {
         int j = shifted(z, y, x, Z, Y, X, off + 3 * r) + PARENT(r, Z, Y, X);
-        PAIR(label_cost, vol[j], TERM_WEIGHT(term_root, 1.0f - temp[j], r), xws[r], ws[r])
+        PAIRS(label_cost, vol[j], TERM_WEIGHT(term_root, 1.0f - temp[j], r), xws, ws, r)
     }
     floatv gmaxv[NGV], gsumv[NGV];   /* a group at a time below, a vector at a time at the end */
     for (int j = 0; j < NGV; ++j) {

@@ -330,3 +330,28 @@ def test_a_full_disk_while_writing_the_sidecar_or_preview_keeps_the_volume(tmp_p
     assert code == EXIT_OUTPUT and f"the volume is in {out}" in err and "No space left on device" in err
     assert np.array_equal(load_volume(out)[0], whole.astype(np.float32))  # ImageJ's float samples
     assert sorted(p.name for p in out.parent.iterdir()) == kept
+
+
+def test_synth_grows_a_colour_png_into_an_rgb_tif_and_regrows_it(tmp_path, capsys, device):
+    from PIL import Image
+    from skimage import data
+
+    Image.fromarray(np.ascontiguousarray(data.coffee()[180:212, 300:332])).save(tmp_path / "c.png")
+    out = tmp_path / "v.tif"
+    argv = ["synth", str(tmp_path / "c.png"), "-o", str(out), *FAST, "--device", device.device.name.strip()[:8]]
+    assert main([*argv, "--preview", str(tmp_path / "p.png"), "-q"]) == 0
+    vol, _ = load_volume(out)
+    assert vol.shape == (8, 10, 12, 3) and vol.dtype == np.uint8
+    meta = json.loads((tmp_path / "v.json").read_text())
+    palette = np.array(meta["level_values"])
+    assert palette.shape == (8, 3) and meta["params"]["likelihood"] == "pruned"
+    assert {tuple(c) for c in vol.reshape(-1, 3).tolist()} <= {tuple(c) for c in palette.tolist()}
+    assert np.asarray(Image.open(tmp_path / "p.png")).shape[-1] == 3  # the preview in colour
+    assert main(["synth", "--config", str(tmp_path / "v.json"), "-o", str(tmp_path / "again.npy"), "-q",
+                 "--device", device.device.name.strip()[:8]]) == 0
+    np.testing.assert_array_equal(np.load(tmp_path / "again.npy"), vol)
+    capsys.readouterr()
+    assert main(["evaluate", str(tmp_path / "c.png"), str(out), "--repeats", "2", "-o", str(tmp_path / "r.json")]) == 0
+    assert "a palette of 8 colours" in capsys.readouterr().out
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert all("colour_histogram_kl" in v["distances"] for v in report["views"].values())

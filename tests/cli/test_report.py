@@ -112,12 +112,11 @@ def test_input_errors_exit_2_without_traceback(files, capsys, argv, message):
     assert message in err and "Traceback" not in err
 
 
-def test_colour_exemplars_must_be_grey(tmp_path):
+def test_colour_exemplars_are_rgb_and_grey_ones_in_rgb_grey(tmp_path):
     rgb = np.zeros((20, 20, 3), dtype=np.uint8)
     rgb[..., 0] = 200
     Image.fromarray(rgb).save(tmp_path / "c.png")
-    with pytest.raises(InputError, match="colour"):
-        load_exemplar(tmp_path / "c.png")
+    assert load_exemplar(tmp_path / "c.png").shape == (20, 20, 3)
     rgb[..., 1] = rgb[..., 2] = 200
     Image.fromarray(rgb).save(tmp_path / "g.png")
     assert load_exemplar(tmp_path / "g.png").shape == (20, 20)

@@ -24,7 +24,7 @@ class Stop(Exception):
     pass
 
 
-def _interrupted(tmp_path, device, after: int, **kw) -> tuple[np.ndarray, object]:
+def _interrupted(tmp_path, device, after: int, exemplar="gravel", **kw) -> tuple[np.ndarray, object]:
     """Run with checkpoints and stop it in the progress hook after *after* sweeps."""
     seen = []
 
@@ -34,7 +34,7 @@ def _interrupted(tmp_path, device, after: int, **kw) -> tuple[np.ndarray, object
             raise Stop
 
     with pytest.raises(Stop):
-        clsolid.synthesize("gravel", SHAPE, backend={"checkpoint": tmp_path / "ck"}, progress=stop, device=device, **KW,
+        clsolid.synthesize(exemplar, SHAPE, backend={"checkpoint": tmp_path / "ck"}, progress=stop, device=device, **KW,
                            **kw)
     return tmp_path / "ck"
 
@@ -51,6 +51,18 @@ def test_resumed_run_is_identical_to_the_uninterrupted_one(tmp_path, device, aft
     done = json.loads((folder / META).read_text())["timings"]["scales"]
     assert len(done) == 2 and len(res.timings["scales"]) == 2  # it went on checkpointing to the end
     np.testing.assert_array_equal(clsolid.resume(folder, device=device), whole)  # a finished run: its volume
+
+
+def test_a_colour_run_resumes_identically(tmp_path, device):
+    from skimage import data
+
+    coffee = np.ascontiguousarray(data.coffee()[180:212, 300:332])
+    kw = dict(channel_axis=-1, levels=12)
+    whole = clsolid.synthesize(coffee, SHAPE, device=device, **KW, **kw)
+    folder = _interrupted(tmp_path, device, 2, exemplar=coffee, **kw)
+    resumed = clsolid.resume(folder, device=device)
+    assert resumed.shape == SHAPE + (3,)
+    np.testing.assert_array_equal(resumed, whole)
 
 
 @pytest.mark.parametrize("relaxation", slow_except(["icm", "annealing"], 0))
