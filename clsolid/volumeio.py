@@ -576,15 +576,29 @@ def save_volume(
             _write_npy(tmp, vol, vol.dtype if narrowed is None else narrowed)
         return p
     dtype = _tiff_dtype(vol)
-    if vol.ndim == 4 and dtype != np.uint8 and not _is_ome(p):
-        raise InputError(f"{p.name}: ImageJ stores RGB as 8-bit samples only, and this volume's are {dtype}; "
-                         "write an .ome.tif or a .npy file")
+    _check_rgb_samples(p, vol, dtype)
     with replaced_atomically(p) as tmp:
         if _is_ome(p):
             _write_ome(tmp, vol, dtype, spacing, unit, meta_json)
         else:
             _write_imagej(tmp, vol, dtype, spacing, unit, meta_json, shown=p)
     return p
+
+
+def _check_rgb_samples(path: pathlib.Path, volume: np.ndarray, dtype: np.dtype) -> None:
+    """Refuse RGB samples ImageJ's TIFF cannot hold (8-bit only)."""
+    if volume.ndim == 4 and dtype != np.uint8 and not _is_ome(path):
+        raise InputError(f"{path.name}: ImageJ stores RGB as 8-bit samples only, and this volume's are {dtype}; "
+                         "write an .ome.tif or a .npy file")
+
+
+def check_rgb_output(path: PathLike, exemplar: np.ndarray) -> None:
+    """Raise :class:`~clsolid.errors.InputError` where :func:`save_volume` would refuse to
+    write, at *path*, a colour volume grown from the RGB *exemplar* (whose colours it holds),
+    so that a run can fail before it starts, not after. A grey exemplar passes."""
+    p = pathlib.Path(path)
+    if exemplar.ndim == 3 and p.suffix.lower() in (".tif", ".tiff"):
+        _check_rgb_samples(p, exemplar[None], _tiff_dtype(exemplar))
 
 
 def _is_ome(path: pathlib.Path) -> bool:

@@ -393,7 +393,7 @@ def run_synth(given: dict[str, Any]) -> int:
     from ..core.slices import preview_depths
     from ..exemplar import load_exemplars
     from ..preview import save_preview, save_site_map
-    from ..volumeio import check_calibration, save_volume
+    from ..volumeio import check_calibration, check_rgb_output, save_volume
 
     settings = resolve(given)
     cmd, backend = settings.command, dict(settings.backend)
@@ -403,6 +403,8 @@ def run_synth(given: dict[str, Any]) -> int:
     check_outputs(cmd, backend)
     image = None if cmd.resume is not None else load_exemplars(_exemplar_source(cmd, settings.origin),
                                                                builtin_size=cmd.builtin_size)
+    for exemplar in (image.values() if isinstance(image, dict) else [] if image is None else [image]):
+        check_rgb_output(cmd.output, exemplar)  # now, not after the run
     hooks = [] if cmd.quiet else [render_progress]
     records: list = []
     if cmd.track is not None:

@@ -355,3 +355,14 @@ def test_synth_grows_a_colour_png_into_an_rgb_tif_and_regrows_it(tmp_path, capsy
     assert "a palette of 8 colours" in capsys.readouterr().out
     report = json.loads((tmp_path / "r.json").read_text())
     assert all("colour_histogram_kl" in v["distances"] for v in report["views"].values())
+
+
+def test_a_16_bit_colour_run_to_an_imagej_tif_is_refused_before_it_starts(tmp_path, capsys):
+    import tifffile
+
+    rgb = np.random.default_rng(0).integers(0, 65536, (24, 24, 3)).astype(np.uint16)
+    tifffile.imwrite(tmp_path / "c.tif", rgb, photometric="rgb")
+    out = tmp_path / "v.tif"
+    assert main(["synth", str(tmp_path / "c.tif"), "-o", str(out), *FAST, "--device", "reference"]) == EXIT_USAGE
+    assert "8-bit samples only" in capsys.readouterr().err and not out.exists()
+    assert not out.with_suffix(".json").exists()
