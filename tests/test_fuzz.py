@@ -112,8 +112,9 @@ def _check_readers(path: Path) -> None:
     """Every reader of *path* gives a result that keeps its promises, or an InputError."""
     image = _outcome(load_exemplar, str(path))
     event(f"exemplar: {type(image).__name__}")
-    if isinstance(image, np.ndarray):
-        assert image.ndim == 2 and image.size > 0 and image.dtype.kind in "iuf"
+    if isinstance(image, np.ndarray):  # grey, or RGB: a file whose last axis holds 3 samples
+        assert (image.ndim == 2 or image.shape[-1:] == (3,) and image.ndim == 3) and image.size > 0
+        assert image.dtype.kind in "iuf"
         assert image.dtype.isnative and image.flags.c_contiguous
         assert np.isfinite(image).all()
     per_view = _outcome(load_exemplars, {"front": path, "top": str(path)})
@@ -124,7 +125,7 @@ def _check_readers(path: Path) -> None:
         assert isinstance(data, np.ndarray) and set(info) >= {"voxel_size", "unit", "metadata"}
     volume = _outcome(load_report_volume, path)
     if isinstance(volume, np.ndarray):
-        assert volume.ndim == 3
+        assert volume.ndim == 3 or (volume.ndim == 4 and volume.shape[-1] == 3)
     size = image_pixel_size(path)  # None where unreadable, never an exception
     assert size is None or (len(size) == 2 and len(size[0]) == 2)
 
