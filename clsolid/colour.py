@@ -63,11 +63,15 @@ def grey_if_equal(image: np.ndarray) -> np.ndarray:
     return image
 
 
+def full_scale(dtype: Any, top: float) -> float:
+    """The value that stands for a full channel: an integer type's maximum, a float's *top*
+    (:func:`float_top`)."""
+    return float(np.iinfo(dtype).max) if np.dtype(dtype).kind in "iu" else top
+
+
 def _unit_rgb(values: np.ndarray, dtype: np.dtype, top: float) -> np.ndarray:
-    """RGB values scaled to 0..1: integers by their type's maximum, floats by *top*."""
-    if np.dtype(dtype).kind in "iu":
-        top = float(np.iinfo(dtype).max)
-    return np.clip(np.asarray(values, np.float64) / top, 0.0, 1.0)
+    """RGB values scaled to 0..1 (:func:`full_scale`)."""
+    return np.clip(np.asarray(values, np.float64) / full_scale(dtype, top), 0.0, 1.0)
 
 
 def float_top(image: np.ndarray) -> float:
@@ -115,13 +119,17 @@ def kmeans(points: np.ndarray, k: int, seed: int = 0) -> tuple[np.ndarray, np.nd
         new = nearest(pts, c)
         if np.array_equal(new, labels):
             break
-        labels = new
-        counts = np.bincount(labels, minlength=c.shape[0])
-        kept = counts > 0
-        sums = np.stack([np.bincount(labels, weights=pts[:, j], minlength=c.shape[0]) for j in range(pts.shape[1])], 1)
-        c = sums[kept] / counts[kept, None]
-        labels = np.cumsum(kept)[labels] - 1  # renumbered past the dropped clusters
+        c, labels = cluster_means(pts, new, c.shape[0])
     return c, labels.astype(np.int32)
+
+
+def cluster_means(points: np.ndarray, labels: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """The mean of *points* ``(n, d)`` in each of the *k* clusters *labels* names that holds
+    any, and the labels renumbered past the empty ones."""
+    counts = np.bincount(labels, minlength=k)
+    kept = counts > 0
+    sums = np.stack([np.bincount(labels, weights=points[:, j], minlength=k) for j in range(points.shape[1])], 1)
+    return sums[kept] / counts[kept, None], np.cumsum(kept)[labels] - 1
 
 
 def nearest(points: np.ndarray, centres: np.ndarray, chunk: int = 1 << 16) -> np.ndarray:
@@ -160,12 +168,8 @@ def palette(image: np.ndarray, levels: int) -> tuple[np.ndarray, np.ndarray, boo
         if feats.shape[0] > KMEANS_SAMPLE:
             fit = feats[np.random.default_rng(0).choice(feats.shape[0], KMEANS_SAMPLE, replace=False)]
         centres, _ = kmeans(fit, levels)
-        labels = nearest(feats, centres)
-        kept = np.bincount(labels, minlength=centres.shape[0]) > 0  # a centre no pixel is nearest to goes
-        labels = (np.cumsum(kept) - 1)[labels]
-        counts = np.bincount(labels)
-        means = np.stack([np.bincount(labels, weights=pixels[:, j].astype(np.float64)) for j in range(CHANNELS)],
-                         1) / counts[:, None]
+        # each colour the mean of the pixels nearest its centre (a centre none is nearest to goes)
+        means, labels = cluster_means(pixels.astype(np.float64), nearest(feats, centres), centres.shape[0])
         if image.dtype.kind in "iu":
             info = np.iinfo(image.dtype)
             means = np.clip(np.rint(means), info.min, info.max)

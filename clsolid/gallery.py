@@ -355,7 +355,7 @@ _COLOUR_FIELDS = {
     "wood": ("coffee", slice(320, 400), slice(0, 80)),
     "tabletop": ("coffee", slice(0, 128), slice(472, 600)),
     "fur": ("chelsea", slice(0, 80), slice(190, 270)),
-    "stained": ("immunohistochemistry", slice(256, 512), slice(128, 384)),
+    "stained": ("immunohistochemistry", *_TISSUE_CROP),  # the tissue exemplar's field, in colour
 }
 
 
@@ -453,7 +453,8 @@ def gallery_names() -> tuple[str, ...]:
 
 
 def colour_names() -> tuple[str, ...]:
-    """Names of the colour gallery's RGB exemplars (every size up to 64)."""
+    """Names of the colour gallery's RGB exemplars (at 64, and up to the side of each one's
+    field of its photograph)."""
     return tuple(e.name for e in _COLOUR_ENTRIES)
 
 

@@ -53,12 +53,12 @@ def grey8(panels: list[np.ndarray]) -> list[np.ndarray]:
 def colour8(panels: list[np.ndarray]) -> list[np.ndarray]:
     """RGB panels as 8-bit colours: integers by their type's full range, floats by 0..1 (or
     0..their joint maximum, where that passes 1), so that a colour looks as it is, unstretched."""
-    from .colour import float_top
+    from .colour import float_top, full_scale
 
     top = max(float_top(p) for p in panels)
     out = []
     for p in panels:
-        full = float(np.iinfo(p.dtype).max) if p.dtype.kind in "iu" else top
+        full = full_scale(p.dtype, top)
         out.append(np.clip(np.rint(p.astype(np.float64) * (255.0 / full)), 0, 255).astype(np.uint8))
     return out
 

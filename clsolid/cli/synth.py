@@ -403,7 +403,8 @@ def run_synth(given: dict[str, Any]) -> int:
     check_outputs(cmd, backend)
     image = None if cmd.resume is not None else load_exemplars(_exemplar_source(cmd, settings.origin),
                                                                builtin_size=cmd.builtin_size)
-    for exemplar in (image.values() if isinstance(image, dict) else [] if image is None else [image]):
+    exemplars = list(image.values()) if isinstance(image, dict) else [] if image is None else [image]
+    for exemplar in exemplars:
         check_rgb_output(cmd.output, exemplar)  # now, not after the run
     hooks = [] if cmd.quiet else [render_progress]
     records: list = []
@@ -418,7 +419,7 @@ def run_synth(given: dict[str, Any]) -> int:
         if cmd.resume is not None:
             result = resume(cmd.resume, device=cmd.device, backend=options, progress=report, full_output=True)
         else:
-            colour = any(im.ndim == 3 for im in (image.values() if isinstance(image, dict) else [image]))
+            colour = any(im.ndim == 3 for im in exemplars)
             result = synthesize(image, cmd.shape, method=cmd.method, rng=cmd.seed, device=cmd.device,
                                 backend=options, progress=report, full_output=True,
                                 site_map=cmd.site_map is not None, channel_axis=-1 if colour else None,

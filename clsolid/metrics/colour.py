@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..colour import float_top, lab, nearest, palette
+from ..colour import float_top, full_scale, lab, nearest, palette
 from . import references
 from ._common import smoothed_probabilities, symmetric_kl
 
@@ -46,8 +46,7 @@ class ColourBins:
 
 
 def _channel_edges(exemplar: np.ndarray) -> np.ndarray:
-    top = float(np.iinfo(exemplar.dtype).max) if exemplar.dtype.kind in "iu" else float_top(exemplar)
-    return np.linspace(0.0, top, CHANNEL_BINS + 1)
+    return np.linspace(0.0, full_scale(exemplar.dtype, float_top(exemplar)), CHANNEL_BINS + 1)
 
 
 def channel_distances(exemplar: np.ndarray, stack: np.ndarray) -> dict[str, float]:
