@@ -183,7 +183,7 @@ def synthesize(
         quantised on one shared set of levels, and segmented ones must share one phase set.
         ``"ml"`` sums over them exactly (``likelihood="exact"``), ``"kopf"`` and ``"wl"``
         search them whole (``search="exact"``); ``"chen-wang"`` takes one exemplar.
-        A colour PNG or TIFF, or an array with *channel_axis*, is an RGB exemplar (``"ml"``).
+        A colour PNG or TIFF, or an array with *channel_axis*, is an RGB exemplar (every method).
     shape : tuple of 3 ints
         ``(Z, Y, X)`` size of the block. The block is toroidal (it tiles).
     method : {"ml", "wl", "kopf", "chen-wang"}
@@ -413,11 +413,12 @@ def _synthesize_search(exemplar, shape, params: SearchParams, rng, device, progr
     if site_map and not full_output:
         raise InputError("site_map=True needs full_output=True (the map is SynthesisResult.site_use)")
     image, levels_of, seed = _load(exemplar, params.levels, rng, channel_axis)
-    if levels_of.colour:
-        raise InputError(f"method={method!r} takes grey exemplars; a colour one takes method='ml' (or convert it: "
-                         "skimage.color.rgb2gray)")
+    if levels_of.colour and params.specify and "specify" in given:
+        raise InputError("specify=True maps grey levels onto the exemplar's histogram; a colour exemplar has none "
+                         "(leave specify out)")
     check_host_memory(shape, SEARCH_FOOTPRINT)
-    values = levels_of.to_values(levels_of.labels)
+    # a colour exemplar is searched as its palette's labels (clsolid.search.palette)
+    values = levels_of.labels if levels_of.colour else levels_of.to_values(levels_of.labels)
     if isinstance(image, dict):  # each view searches its own exemplar, whole (check_per_view)
         params = _per_view(image, params, "views" in given)
         if params.search == "coherence" and "search" not in given:
@@ -428,7 +429,7 @@ def _synthesize_search(exemplar, shape, params: SearchParams, rng, device, progr
         grey = values.astype(np.float64)
     n_values = np.unique(pooled(grey)).size
     categorical = is_categorical(n_values, levels_of.exact)
-    params = params.for_exemplar(n_values, categorical)
+    params = params.for_exemplar(n_values, categorical, colour=levels_of.colour)
     if is_reference(device):
         name, make_matcher = "reference (NumPy float64)", ReferenceMatcher
     else:
@@ -438,14 +439,18 @@ def _synthesize_search(exemplar, shape, params: SearchParams, rng, device, progr
         name, make_matcher = dev.name, partial(CLMatcher, dev)
     log.info("synthesising %s from %s with %s on %s, seed %d", shape, _described(image), method, name, seed)
     vol, timings, use, source = run_search(grey, shape, params, seed, make_matcher, progress, count_sites=site_map,
-                                           categorical=categorical)
-    if params.keeps_exemplar_values(categorical):  # exact: each voxel is one of the values
-        vol = vol.astype(levels_of.values.dtype)
+                                           categorical=categorical, palette=levels_of.features)
+    if levels_of.colour or params.keeps_exemplar_values(categorical):  # exact: each voxel is one of the values
+        vol = vol.astype((np.uint8 if levels_of.n_labels <= 256 else np.uint16) if levels_of.colour
+                         else levels_of.values.dtype)  # colour: palette labels
         if params.despeckle and categorical and method != "chen-wang":  # chen-wang's voxels stay copies (its map)
             timings["despeckled"] = despeckle(vol)
+    labels = None
+    if levels_of.colour:
+        labels, vol, grey = vol, levels_of.to_values(vol), levels_of.to_values(levels_of.labels)
     if not full_output:
         return vol
     effective = {**params.to_dict(), "shape": list(shape)}
-    return SynthesisResult(volume=vol, labels=None, exemplar=grey, exemplar_labels=levels_of.labels,
+    return SynthesisResult(volume=vol, labels=labels, exemplar=grey, exemplar_labels=levels_of.labels,
                            level_values=levels_of.values, values_exact=levels_of.exact, seed=seed,
                            params=effective, device=name, timings=timings, site_use=use, source=source)

@@ -124,12 +124,6 @@ def test_colours_by_their_distance_refuse_projected_candidates(coffee):
                            neighborhood=3, scales=1)
 
 
-@pytest.mark.parametrize("method", ["kopf", "wl", "chen-wang"])
-def test_search_methods_refuse_colour_saying_which_takes_it(coffee, method):
-    with pytest.raises(InputError, match="method='ml'"):
-        clsolid.synthesize(coffee, SHAPE, channel_axis=-1, method=method)
-
-
 @pytest.mark.parametrize("likelihood", ["exact", "pruned"])
 def test_a_colour_volume_does_not_depend_on_the_kernels_tuning(device, tiles, likelihood):
     """The work-group size and the voxel-views an item change how the sums are launched,

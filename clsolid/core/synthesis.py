@@ -52,11 +52,13 @@ class SynthesisResult:
         when it holds at most ``levels`` of them, else each level's mean value
         (see :func:`clsolid.exemplar.level_map`); for the search methods, float64: means
         of those values (``wl``, ``kopf`` on grey exemplars) or the values themselves
-        (``chen-wang``; ``kopf`` on categorical ones).
+        (``chen-wang``; ``kopf`` on categorical ones). A colour volume is ``(Z, Y, X, 3)``,
+        every voxel a palette colour, whatever the method.
     labels : ndarray or None
         The same volume as level indices in ``[0, level_values.size)`` (uint8, or uint16
-        above 256 levels): what the engine works on. None for the search methods, whose
-        voxels are exemplar values or their means, not levels.
+        above 256 levels): what the engine works on. None for the search methods on grey
+        exemplars, whose voxels are exemplar values or their means, not levels (on a colour
+        exemplar they work on the palette's labels, and give them).
     exemplar : ndarray or dict
         The exemplar as the engine saw it, in its own units (each pixel replaced by its
         level's value; identical to the input when ``values_exact``); with an exemplar

@@ -118,7 +118,8 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
         src.chosen[i, voxels] = chosen[i]
     values = level.centres[chosen]
     weights = robust_weights(dist, level.span) / excess_factor(src.position[chosen], src.theta)
-    new = chosen[solve(values, weights), np.arange(voxels.size)]
+    best = solve(values, weights) if level.colour is None else level.colour.solve(values, weights)
+    new = chosen[best, np.arange(voxels.size)]
     recount(src.position, src.source[voxels], new)
     src.source[voxels] = new
     vol.reshape(-1)[voxels] = level.centres[new]

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import time
+from functools import partial
 from typing import Any, Callable, NamedTuple
 
 import numpy as np
@@ -31,6 +32,7 @@ from .level import Level, LevelHistogram
 from .codes import phase_codes
 from .match import candidate_sets
 from .params import SearchParams
+from .palette import Palette, colour_pyramid
 from .pyramid import gaussian_pyramid
 from .specify import specify_histogram
 
@@ -72,7 +74,8 @@ def run_search(exemplar: np.ndarray | dict[str, np.ndarray], shape: tuple[int, i
                seed: int,
                make_matcher: Callable[[np.ndarray], Any],
                progress: Callable[[SweepInfo], None] | None = None,
-               count_sites: bool = False, categorical: bool | None = None) -> SearchOutput:
+               count_sites: bool = False, categorical: bool | None = None,
+               palette: np.ndarray | None = None) -> SearchOutput:
     """Grow a ``shape`` block from a 2D *exemplar* (float grey levels) with ``params.method``;
     or from one exemplar per view (a dict by view, ``params.view_names``' views): each view
     then searches its own (the exact search; ``wl`` and ``kopf``).
@@ -85,24 +88,28 @@ def run_search(exemplar: np.ndarray | dict[str, np.ndarray], shape: tuple[int, i
     temperatures: those fields are NaN). Returns a :class:`SearchOutput`; with *count_sites*
     its position histogram counts, for ``chen-wang``, each voxel's source, and for the others
     every voxel matched once more in every view. *categorical*: whether the exemplar's values
-    are phases (:func:`clsolid.phases.is_categorical`; None: by their number alone).
+    are phases (:func:`clsolid.phases.is_categorical`; None: by their number alone). With a
+    colour *palette* ``(P, 3)`` (CIELAB), the exemplar holds its labels, and so does the block
+    (:mod:`clsolid.search.palette`).
     """
     per_view = isinstance(exemplar, dict)
     pool = pooled(exemplar)
     n_values = np.unique(pool).size
     categorical = is_categorical(n_values) if categorical is None else categorical
-    params = params.for_exemplar(n_values, categorical)
+    params = params.for_exemplar(n_values, categorical, colour=palette is not None)
     k = params.neighborhood
+    colour = None if palette is None else Palette(palette, k * k, math.sqrt(params.parent_weight))
+    pyramid = gaussian_pyramid if colour is None else partial(colour_pyramid, lab=colour.lab)
     shapes = level_shapes(shape, params.scales)
     if min(shapes[-1]) < 2:
         raise InputError(f"shape={tuple(shape)} is too small for {params.scales} levels")
     if per_view:
         check_per_view(params, count_sites)
-        view_pyr = {v: gaussian_pyramid(exemplar[v], params.scales) for v in params.view_names}
+        view_pyr = {v: pyramid(exemplar[v], levels=params.scales) for v in params.view_names}
         # a level's pixels pooled over the views: its noise, histogram, values
         pyr = [pooled({v: p[level] for v, p in view_pyr.items()}) for level in range(params.scales)]
     else:
-        view_pyr = {None: gaussian_pyramid(exemplar, params.scales)}
+        view_pyr = {None: pyramid(exemplar, levels=params.scales)}
         pyr = view_pyr[None]
     timings: dict = {"levels": []}
     t0 = time.perf_counter()
@@ -119,14 +126,15 @@ def run_search(exemplar: np.ndarray | dict[str, np.ndarray], shape: tuple[int, i
         level_images = {v: p[level] for v, p in view_pyr.items()} if per_view else pyr[level]
         anchors = _anchor(params, vol, level_images, level, seed, shape)
         codes = phase_codes(pyr[0]) if params.distance == "weighted" and level == 0 else None
-        searched = _searched_table(table, codes, k, params.parent_weight)
+        searched = (_searched_table(table, codes, k, params.parent_weight) if colour is None
+                    else colour.encode_terms(table))
         mismatch = 0 if codes is None else k * k
         starts = np.cumsum([0] + [t.shape[0] for t, _ in tables])
         view_matchers = [make_matcher(searched[a:b], mismatch=mismatch)
                          for a, b in zip(starts[:-1], starts[1:])] if per_view else None
         matcher = view_matchers[0] if per_view else make_matcher(searched, mismatch=mismatch)
         ctx = _level(params, pyr, level, parent_shape, table, searched, centres, vol, matcher, make_matcher, coh,
-                     categorical)
+                     categorical, colour)
         ctx.codes = codes
         if per_view:
             ctx.view_matchers, ctx.view_starts = view_matchers, [int(a) for a in starts[:-1]]
@@ -135,7 +143,8 @@ def run_search(exemplar: np.ndarray | dict[str, np.ndarray], shape: tuple[int, i
         n_sets = set_count(shapes[level], k // 2)
         searches = 0
         t_iter = time.perf_counter()
-        parent = coarse * math.sqrt(params.parent_weight) if use_parent else None  # as the table's parents
+        # the parent terms scaled as the table's (labels: once encoded, Palette.encode_terms)
+        parent = (coarse if colour is not None else coarse * math.sqrt(params.parent_weight)) if use_parent else None
         for it in range(1, params.iterations + 1):
             ctx.seeding = it <= params.exact_passes and _search_at(params, level) == "coherence"
             ctx.exhaustive = ctx.seeding or _search_at(params, level) == "exact"
@@ -171,17 +180,23 @@ def run_search(exemplar: np.ndarray | dict[str, np.ndarray], shape: tuple[int, i
 
 def _level(params: SearchParams, pyr: list[np.ndarray], level: int, parent_shape: tuple[int, int] | None,
            table: np.ndarray, searched: np.ndarray, centres: np.ndarray, vol: np.ndarray, matcher: Any,
-           make_matcher: Callable[..., Any], coarser: coherence.Coherence | None, categorical: bool) -> Level:
+           make_matcher: Callable[..., Any], coarser: coherence.Coherence | None, categorical: bool,
+           colour: Palette | None = None) -> Level:
     """One level's :class:`Level`: weights, and what the method and search keep: kopf's
     grey-level histogram, chen-wang's candidate sets and histograms, the coherence state
     (started from the *coarser* level's). *table* holds the sites' grey values, *searched*
-    the rows the matcher compares (with phase codes, :mod:`clsolid.search.codes`)."""
+    the rows the matcher compares (with phase codes, :mod:`clsolid.search.codes`; with a *colour*
+    palette, the labels' colours, and the weights repeated for each channel)."""
     k, use_parent = params.neighborhood, parent_shape is not None
+    w_first = centre_weights(k, use_parent, centre=False, causal=params.causal)
+    w_again = centre_weights(k, use_parent, centre=True, causal=params.causal)
+    if colour is not None:
+        w_first, w_again = colour.weights(w_first), colour.weights(w_again)
     ctx = Level(params=params, matcher=matcher, centres=centres,
                 patches=table[:, : k * k].astype(np.float64), values=np.unique(pyr[level]),
-                w_first=centre_weights(k, use_parent, centre=False, causal=params.causal),
-                w_again=centre_weights(k, use_parent, centre=True, causal=params.causal),
-                span=float(np.ptp(pyr[0])) or 1.0, categorical=categorical)
+                w_first=w_first, w_again=w_again,
+                span=(float(np.ptp(pyr[0])) or 1.0) if colour is None else colour.span, categorical=categorical,
+                colour=colour)
     if params.method == "kopf":
         ctx.histogram = LevelHistogram(pyr[0], pyr[level], vol, params.view_names if params.histogram == "slice" else ())
     n_cw = params.candidates if params.method == "chen-wang" else 0

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..core.views import VIEW_AXES
 from ..balance import project_bias, sweep_target
-from .level import Level
+from .level import Level, vote
 from .match import square_offsets
 from .wl import matches
 
@@ -84,7 +84,7 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
         balanced = level.params.balance and level.phases
         new = balanced_set_vote(level, values, w, old) if balanced else vote(values, w)
     else:
-        new = (w * values).sum(axis=0) / w.sum(axis=0)
+        new = level.blend(values, w)
     flat[voxels] = new
     hist.replace(old, new, voxels)
     return sites.size
@@ -105,13 +105,6 @@ def balanced_set_vote(level: Level, values: np.ndarray, weights: np.ndarray, old
     unbiased = support / np.maximum(support.sum(axis=0), np.finfo(np.float64).tiny)
     target = sweep_target(hist.exemplar, fixed, old.size, unbiased.mean(axis=1), level.params.balance)
     return phases[vote_balanced(support, target)]
-
-
-def vote(values: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """Per column, the value of ``values (views, m)`` with the largest total weight (the
-    first view's on a tie)."""
-    support = np.stack([(weights * (values == values[j])).sum(axis=0) for j in range(values.shape[0])])
-    return values[np.argmax(support, axis=0), np.arange(values.shape[1])]
 
 
 def overlap_pass(level: Level, vol: np.ndarray, coarse: np.ndarray | None) -> int:

@@ -18,6 +18,13 @@ from .projection import Projection
 from ..phases import is_categorical
 
 
+def vote(values: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Per column, the value of ``values (views, m)`` with the largest total weight (the
+    first view's on a tie)."""
+    support = np.stack([(weights * (values == values[j])).sum(axis=0) for j in range(values.shape[0])])
+    return values[np.argmax(support, axis=0), np.arange(values.shape[1])]
+
+
 class LevelHistogram:
     """Grey-level histograms of the exemplar and of the block at one level, on the finest
     exemplar's own values as bins (each value counts for the nearest), kept up to date as
@@ -82,7 +89,9 @@ class Level:
     (:class:`~clsolid.search.coherence.Coherence`) for the accelerated search; ``codes``
     (:class:`~clsolid.search.codes.PhaseCodes`) where the squares compare phase codes
     (the matcher's table holds them; ``patches`` and ``centres`` stay grey values);
-    ``categorical`` whether the exemplar's values are phases (:func:`clsolid.phases.is_categorical`)."""
+    ``categorical`` whether the exemplar's values are phases (:func:`clsolid.phases.is_categorical`);
+    ``colour`` (:class:`~clsolid.search.palette.Palette`) where the values are a colour palette's
+    labels (the matcher's rows and the weights hold their colours, channel by channel)."""
 
     params: SearchParams
     matcher: Any
@@ -99,6 +108,7 @@ class Level:
     exhaustive: bool = False  # this pass searches every site even under the coherence search
     seeding: bool = False  # ...and seeds the candidates of the passes after (exact_passes)
     codes: Any = None
+    colour: Any = None
     view_matchers: list | None = None  # an exemplar per view: each view's matcher over its own sites...
     view_starts: list[int] | None = None  # ...which start there in centres and patches
     _projections: dict = field(default_factory=dict, init=False, repr=False)  # by weights: projection()
@@ -112,8 +122,9 @@ class Level:
     @cached_property
     def block(self) -> DeviceBlock | None:
         """The block on an OpenCL matcher's device (:class:`~clsolid.search.block.DeviceBlock`), made
-        at the first search; None for another matcher (the float64 reference)."""
-        if not isinstance(self.matcher, CLMatcher) or self.view_matchers is not None:
+        at the first search; None for another matcher (the float64 reference), or where the
+        queries are gathered on the host (an exemplar per view, colour labels)."""
+        if not isinstance(self.matcher, CLMatcher) or self.view_matchers is not None or self.colour is not None:
             return None
         return DeviceBlock(self.matcher)
 
@@ -142,7 +153,19 @@ class Level:
         as the matcher compares them (the square's terms encoded with ``codes``)."""
         k = self.params.neighborhood
         q = voxel_features(vol, coarse, voxels, self.params.view_names[view], k)
+        if self.colour is not None:
+            return self.colour.encode_terms(q)
         return q if self.codes is None else self.codes.encode_terms(q, k * k)
+
+    def blend(self, values: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+        """Per column of *values* ``(views, m)``, their (*weights*-weighted) mean; with colour
+        labels, their weighted vote (:func:`vote`): a mean colour, even taken to the nearest
+        palette colour, drifts toward the palette's middle (docs/design.md#colour-search)."""
+        if self.colour is not None:
+            return vote(values, np.ones(values.shape) if weights is None else weights)
+        if weights is None:
+            return values.mean(axis=0)
+        return (weights * values).sum(axis=0) / weights.sum(axis=0)
 
     def best(self, view: int, voxels: np.ndarray, vol: np.ndarray, coarse: np.ndarray | None,
              weights: np.ndarray, queries: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -157,6 +180,15 @@ class Level:
             site, least = self.view_matchers[view].best(
                 self.queries(view, voxels, vol, coarse) if queries is None else queries, weights)
             return site + self.view_starts[view], least
+        if self.colour is not None:  # queries of colours, gathered on the host
+            if queries is None:
+                queries = self.queries(view, voxels, vol, coarse)
+            if self.coherence is not None and not self.exhaustive:
+                return self.coherence.best(self.matcher, view, voxels, queries, weights)
+            site, least = self.matcher.best(queries, weights)
+            if self.coherence is not None:
+                self.coherence.record(view, voxels, site)
+            return site, least
         if self.coherence is not None and not self.exhaustive:
             return self.coherence.search(self.matcher, view, voxels, self.searched(vol), coarse, k, weights, queries,
                                          self.block)

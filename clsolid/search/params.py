@@ -201,11 +201,22 @@ class SearchParams:
         if self.index_histogram and self.method == "chen-wang":
             raise InputError("index_histogram=True: chen-wang keeps its own index histogram, over its candidate sets")
 
-    def for_exemplar(self, n_values: int, categorical: bool) -> "SearchParams":
+    def for_exemplar(self, n_values: int, categorical: bool, colour: bool = False) -> "SearchParams":
         """These parameters with ``distance="auto"``, ``index_histogram=None`` and
         ``exact_passes=None`` resolved for an exemplar of *n_values* values, *categorical* if
-        they are phases (:func:`clsolid.phases.is_categorical`)."""
-        out, grey_kopf = self, self.method == "kopf" and not categorical
+        they are phases (:func:`clsolid.phases.is_categorical`). A *colour* exemplar's squares
+        compare colours (:mod:`clsolid.search.palette`): no phase codes, no grey-level
+        histogram specification, no seeding on principal components (its queries are
+        gathered on the host), and not Kopf's overlap rule."""
+        out, grey_kopf = self, self.method == "kopf" and not categorical and not colour
+        if colour:
+            if out.distance == "weighted":
+                raise InputError("distance='weighted' compares phases by name; a colour exemplar's squares compare "
+                                 "colours in CIELAB (leave distance out)")
+            if out.rule == "overlap":
+                raise InputError("rule='overlap' averages grey values; with a colour exemplar use rule='centres'")
+            out = replace(out, distance="squared", specify=False,
+                          seed_components=0 if out.search == "coherence" else None)
         if out.distance == "auto":
             phases = out.method == "kopf" and categorical and n_values >= 3
             out = replace(out, distance="weighted" if phases else "squared")

@@ -24,7 +24,7 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
     """One conflict-free set: search, average, and the inner repetition. Returns the searches made."""
     flat = vol.reshape(-1)
     sites = matches(level, vol, coarse, voxels, level.w_first)[0]  # (views, m)
-    flat[voxels] = level.centres[sites].mean(axis=0)
+    flat[voxels] = level.blend(level.centres[sites])
     searches = sites.size
     todo = np.arange(voxels.size)
     for _ in range(level.params.inner - 1):
@@ -35,5 +35,5 @@ def update(level: Level, vol: np.ndarray, coarse: np.ndarray | None, voxels: np.
             break
         todo = todo[moved]
         sites[:, todo] = again[:, moved]
-        flat[voxels[todo]] = level.centres[sites[:, todo]].mean(axis=0)
+        flat[voxels[todo]] = level.blend(level.centres[sites[:, todo]])
     return searches

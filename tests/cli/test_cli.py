@@ -357,6 +357,23 @@ def test_synth_grows_a_colour_png_into_an_rgb_tif_and_regrows_it(tmp_path, capsy
     assert all("colour_histogram_kl" in v["distances"] for v in report["views"].values())
 
 
+def test_synth_grows_a_colour_png_with_kopf_and_regrows_it(tmp_path, capsys, device):
+    from PIL import Image
+    from skimage import data
+
+    Image.fromarray(np.ascontiguousarray(data.coffee()[180:212, 300:332])).save(tmp_path / "c.png")
+    out = tmp_path / "k.tif"
+    dev = ["--device", device.device.name.strip()[:8]]
+    assert main(["synth", str(tmp_path / "c.png"), "-o", str(out), "--method", "kopf", "--shape", "8", "10", "12",
+                 "--levels", "8", "--scales", "2", "--iterations", "2", "-q", *dev]) == 0
+    vol, _ = load_volume(out)
+    assert vol.shape == (8, 10, 12, 3) and vol.dtype == np.uint8
+    palette = np.array(json.loads((tmp_path / "k.json").read_text())["level_values"])
+    assert {tuple(c) for c in vol.reshape(-1, 3).tolist()} <= {tuple(c) for c in palette.tolist()}
+    assert main(["synth", "--config", str(tmp_path / "k.json"), "-o", str(tmp_path / "again.npy"), "-q", *dev]) == 0
+    np.testing.assert_array_equal(np.load(tmp_path / "again.npy"), vol)
+
+
 def test_a_16_bit_colour_run_to_an_imagej_tif_is_refused_before_it_starts(tmp_path, capsys):
     import tifffile
 
