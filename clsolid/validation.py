@@ -15,12 +15,15 @@ from typing import Any, Callable
 import numpy as np
 
 from .api import synthesize
+from .colour import float_top, lab, nearest, palette
+from .core.views import DEPTH_AXIS
 from .errors import InputError
 from .groundtruth import sections as cut_sections
 from .metrics import truth
 from .metrics import correlation_lengths, two_point_correlation_axes
 from .metrics._common import as_volume, check_int, jsonable
 from .phases import is_categorical
+from .preview import view_slice
 from .report import _require_matplotlib
 
 log = logging.getLogger(__name__)
@@ -40,6 +43,22 @@ def segment(real: np.ndarray, classes: int) -> tuple[np.ndarray, list[float] | N
     return np.digitize(real, thresholds).astype(np.uint8), thresholds
 
 
+class ColourCut:
+    """How a colour volume ``(Z, Y, X, 3)`` becomes phases: *classes* colours of the real
+    volume (its own colours when it has at most that many, else k-means in CIELAB,
+    :func:`clsolid.colour.palette`), each voxel of the real volume and of every generated
+    one the phase of the nearest of them in CIELAB."""
+
+    def __init__(self, real: np.ndarray, classes: int) -> None:
+        self.dtype, self.top = real.dtype, float_top(real)
+        self.colours = palette(real, classes)[1]
+        self._lab = lab(self.colours, self.dtype, self.top)
+
+    def __call__(self, volume: np.ndarray) -> np.ndarray:
+        points = lab(np.asarray(volume).reshape(-1, 3), self.dtype, self.top)
+        return nearest(points, self._lab).reshape(np.shape(volume)[:-1]).astype(np.uint8)
+
+
 #: What :func:`validate` hands the generator: the central front section, or every view's.
 SECTIONS = ("front", "all")
 
@@ -52,8 +71,9 @@ def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int
 
     Parameters
     ----------
-    real : array_like, (Z, Y, X)
-        The real volume, segmented (at most 8 phase values) or grey.
+    real : array_like, (Z, Y, X) or (Z, Y, X, 3)
+        The real volume, segmented (at most 8 phase values), grey, or RGB (the generator
+        then grows colour; the properties are those of the phases :class:`ColourCut` makes).
     method : str
         The generator (:func:`clsolid.synthesize`'s ``method``).
     n : int
@@ -67,7 +87,7 @@ def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int
         Passed to :func:`clsolid.synthesize`.
     classes : int
         For a grey real volume, the phases to cut it into (multi-Otsu thresholds, applied to
-        the generated volumes too).
+        the generated volumes too); for an RGB one, the colours it is cut by (:class:`ColourCut`).
     tortuosity : bool
         Solve for tortuosity factors (phases over a quarter of the volume).
     sections : {"front", "all"}
@@ -80,7 +100,7 @@ def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int
     Returns
     -------
     dict
-        JSON-ready: ``real`` (shape, section, thresholds), ``generated`` (method, shape,
+        JSON-ready: ``real`` (shape, section, thresholds, colours), ``generated`` (method, shape,
         seeds), ``band_count`` (the real volume's sub-volumes), ``phases`` (by phase and
         property: real, band, generated mean, error, in_band, met; see
         :func:`clsolid.metrics.truth.compare_properties`), ``section`` (by phase, the
@@ -89,23 +109,33 @@ def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int
         ``correlation_length`` (along z, y and x: the real volume's, the generated volumes'
         mean and its relative error; :func:`clsolid.metrics.correlation_lengths`) and ``targets``.
     """
-    vol = as_volume(real, "real volume", min_side=4)
+    arr = np.asarray(real)
+    colour = arr.ndim == 4 and arr.shape[-1] == 3  # an RGB volume: cut into phases by colour
+    as_volume(arr[..., 0] if colour else arr, "real volume", min_side=4)
+    vol = arr
     n = check_int(n, "n", 1)
     classes = check_int(classes, "classes", 2)
     if shape is None:
-        shape = tuple(max(2, s // 2) for s in vol.shape)
+        shape = tuple(max(2, s // 2) for s in vol.shape[:3])
     if len(tuple(shape)) != 3:
         raise InputError(f"shape={shape!r} must be three sides (Z, Y, X)")
     shape = tuple(check_int(s, "shape", 2) for s in shape)
-    truth.subvolume_corners(vol.shape, shape)  # the band needs sub-volumes of that shape
+    truth.subvolume_corners(vol.shape[:3], shape)  # the band needs sub-volumes of that shape
     say = progress or (lambda line: None)
-    labels, thresholds = segment(vol, classes)
+    if colour:
+        to_phases, thresholds = ColourCut(vol, classes), None
+        labels = to_phases(vol)
+    else:
+        labels, thresholds = segment(vol, classes)
+        to_phases = None if thresholds is None else (lambda v: np.digitize(v, thresholds).astype(np.uint8))
     phases = np.unique(labels)
     max_lag = min(shape) // 2
     if sections not in SECTIONS:
         raise InputError(f"sections={sections!r} must be one of {', '.join(map(repr, SECTIONS))}")
     z = vol.shape[0] // 2
-    section = vol[z] if sections == "front" else dict(cut_sections(vol))
+    section = vol[z] if sections == "front" else (
+        dict(cut_sections(vol)) if not colour else
+        {view: view_slice(vol, view, vol.shape[axis] // 2) for view, axis in DEPTH_AXIS.items()})
     seen_as = f"front, z = {z}" if sections == "front" else (
         f"front z = {z}, right x = {vol.shape[2] // 2}, top y = {vol.shape[1] // 2}")
 
@@ -113,8 +143,8 @@ def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int
     for i in range(n):
         say(f"volume {i + 1} of {n}: {method}, seed {seed + i}, shape {shape}")
         volume = np.asarray(synthesize(section, shape, method=method, rng=seed + i, device=device, params=params,
-                                       **options))
-        grown.append(volume if thresholds is None else np.digitize(volume, thresholds).astype(np.uint8))
+                                       channel_axis=-1 if colour else None, **options))
+        grown.append(volume if to_phases is None else to_phases(volume))
     say(f"real volume {vol.shape}: properties of the whole and of its sub-volumes of {shape}")
     real_props = truth.solid_properties(labels, phases=phases, max_lag=max_lag, tortuosity=tortuosity)
     # The phases the real volume's fractions select, solved in every sample alike.
@@ -134,7 +164,8 @@ def validate(real: Any, *, method: str = "ml", n: int = 3, shape: tuple[int, int
                   "s2": list(two_point_correlation_axes(cut, phase, max_lag=max_lag))}
             for key, phase in zip(real_props, phases)}
     return jsonable({
-        "real": {"shape": vol.shape, "section": seen_as, "thresholds": thresholds},
+        "real": {"shape": vol.shape[:3], "section": seen_as, "thresholds": thresholds,
+                 "colours": to_phases.colours.tolist() if colour else None},
         "generated": {"method": method, "shape": shape, "seeds": list(range(seed, seed + n))},
         "band_count": count, "phases": compared, "section": seen, "volumes": samples,
         "correlation_length": lengths,
@@ -182,6 +213,10 @@ def format_validation(report: dict) -> str:
              f"{report['band_count']} real sub-volumes of that shape"]
     if report["real"]["thresholds"]:
         lines.append("grey levels cut at " + ", ".join(f"{t:.4g}" for t in report["real"]["thresholds"]))
+    if report["real"].get("colours"):
+        lines.append("colours cut by the nearest (CIELAB) of " + ", ".join(
+            "(" + ", ".join(f"{c:.4g}" for c in rgb) + ")" for rgb in report["real"]["colours"])
+            + ": phase 0, 1, ...")
     widths = (16, 10, 20, 10, 10)
     head = ("property", "real", "band", "generated", "error")
     for key, rows in report["phases"].items():

@@ -7,7 +7,7 @@ import pytest
 
 from clsolid.errors import InputError
 from clsolid.groundtruth import ground_truth, isotropic_field
-from clsolid.validation import format_validation, plot_validation, segment, validate
+from clsolid.validation import ColourCut, format_validation, plot_validation, segment, validate
 
 SMALL = dict(neighborhood=3, scales=2)
 
@@ -49,6 +49,23 @@ def test_a_grey_real_volume_is_cut_at_its_own_levels_and_so_are_the_grown_ones(d
     assert report["real"]["thresholds"] == pytest.approx(thresholds)
     assert set(report["phases"]) == {"0", "1"} and "tortuosity" not in report["phases"]["0"]
     assert "grey levels cut at" in format_validation(report)
+
+
+@pytest.mark.parametrize("method", ["ml", "kopf"])
+def test_an_rgb_real_volume_is_cut_by_its_colours_and_grown_in_colour(device, method):
+    """Two phases drawn in two noisy colours: the cut finds the phases again, and the grown
+    colour volumes are cut by the same colours (their fractions near the section's)."""
+    phases = isotropic_field(24, seed=2, correlation_length=3.0, fractions=(0.55, 0.45))
+    rng = np.random.default_rng(0)
+    colours = np.array([[190, 120, 60], [40, 70, 160]])
+    rgb = np.clip(colours[phases] + rng.integers(-12, 13, phases.shape + (3,)), 0, 255).astype(np.uint8)
+    cut = ColourCut(rgb, 2)
+    assert np.array_equal(cut(rgb), phases if cut.colours[0, 2] < 100 else 1 - phases)
+    report = validate(rgb, n=1, shape=(12, 12, 12), method=method, device=device, tortuosity=False, **SMALL)
+    assert report["real"]["shape"] == [24, 24, 24] and len(report["real"]["colours"]) == 2
+    for key, rows in report["phases"].items():
+        assert abs(rows["fraction"]["generated"] - report["section"][key]["fraction"]) < 0.1
+    assert "colours cut by the nearest" in format_validation(report)
 
 
 def test_a_segmented_real_volume_keeps_its_values():

@@ -24,7 +24,7 @@ def add_validate(sub: Any) -> argparse.ArgumentParser:
                                    "compare their 3D properties (per phase: fraction, surface area, S2 per axis, "
                                    "connected fraction, tortuosity factor) with the real volume's and with its "
                                    "own spread over sub-volumes of the same size.")
-    p.add_argument("real", metavar="REAL3D", help="the real 3D (Z, Y, X) volume, segmented or grey (.npy, .tif)")
+    p.add_argument("real", metavar="REAL3D", help="the real 3D volume, segmented, grey or RGB (Z, Y, X[, 3]) (.npy, .tif)")
     p.add_argument("--method", default=None, choices=tuple(METHODS), help="the generator (default: ml, or the config's)")
     p.add_argument("-n", type=int, default=3, help="volumes to grow (default 3)")
     p.add_argument("--shape", type=int, nargs=3, metavar=("Z", "Y", "X"), default=None,
@@ -34,7 +34,7 @@ def add_validate(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--sections", default="front", choices=("front", "all"),
                    help="hand the generator the central front section (default), or all three, each its view's "
                         "own exemplar (anisotropic materials; ml)")
-    p.add_argument("--classes", type=int, default=2, help="phases to cut a grey real volume into (default 2)")
+    p.add_argument("--classes", type=int, default=2, help="phases to cut a grey or colour real volume into (default 2)")
     p.add_argument("--config", metavar="FILE.toml", default=None, help="the method's options from a TOML file")
     p.add_argument("--no-tortuosity", action="store_true", help="skip the tortuosity factors (the slowest part)")
     p.add_argument("-o", "--output", metavar="REPORT.json", help="write the full report as JSON")

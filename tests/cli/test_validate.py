@@ -28,6 +28,18 @@ def test_validate_prints_the_table_and_writes_the_report(tmp_path, capsys, devic
     assert "phase 0" in out and "S2 along x" in out and "report written" in out
 
 
+def test_validate_takes_an_rgb_volume(tmp_path, capsys, device):
+    phases = ground_truth("iso2", 32, seed=0).astype(bool).astype(int)
+    path = tmp_path / "rgb.npy"
+    np.save(path, np.array([[200, 90, 40], [30, 60, 170]], np.uint8)[phases])
+    config = tmp_path / "small.toml"
+    config.write_text("method = \"kopf\"\nneighborhood = 3\nscales = 2\n")
+    code = main(["validate", str(path), "-n", "1", "--shape", "16", "16", "16", "--config", str(config),
+                 "--no-tortuosity", "--device", device.device.name.strip()[:8], "-q"])
+    assert code == 0
+    assert "colours cut by the nearest (CIELAB) of (30, 60, 170), (200, 90, 40)" in capsys.readouterr().out
+
+
 def test_an_unwritable_report_is_refused_before_anything_grows(tmp_path, capsys, real):
     blocker = tmp_path / "file"
     blocker.write_text("")
