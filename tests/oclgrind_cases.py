@@ -311,6 +311,33 @@ def match(device: Device) -> None:
 
 
 @case
+def tensor(device: Device) -> None:
+    """convolve (mirrored and wrapped, plain and odd taps), products, tensor_features,
+    tensor_std and tensor_best for every metric (a causal weight of 0 included), against
+    the float64 references to float32 rounding."""
+    from clsolid.tensor import METRICS, neighbourhood_dissimilarity, structure_tensor
+    from clsolid.tensor.opencl import TensorMatcher
+    from clsolid.tensor.opencl import structure_tensor as device_structure_tensor
+
+    image = _grey((9, 11))
+    for boundary in ("reflect", "wrap"):
+        ref = structure_tensor(image, 1.0, 1.0, boundary)
+        got = device_structure_tensor(device, image, 1.0, 1.0, boundary)
+        assert np.abs(got - ref).max() <= 1e-5 * np.abs(ref).max(), boundary
+    flat = ref.reshape(-1, 3)
+    rng = np.random.default_rng(5)
+    table, queries = flat[rng.choice(len(flat), (13, 4))], flat[rng.choice(len(flat), (5, 4))]
+    weights = np.array([1.0, 0.0, 2.0, 1.0])
+    for metric in METRICS:
+        matcher = TensorMatcher(device, table, metric, alpha=0.5, eps=1.0, weights=weights)
+        want = neighbourhood_dissimilarity(queries[:, None], table[None], metric, 0.5, 1.0, weights)
+        got = matcher.distances(queries)
+        assert np.abs(got - want).max() <= 1e-5 * np.abs(want).max(), metric
+        site, _ = matcher.best(queries)
+        assert np.all(want[np.arange(5), site] <= want.min(axis=1) + 1e-5 * np.abs(want).max()), metric
+
+
+@case
 def gather(device: Device) -> None:
     """voxel_queries (with and without a parent level, every view, wrapping squares) and
     project_queries: the device's gathers against NumPy's."""

@@ -33,7 +33,7 @@ UNOPTIMISED = ("--build-options", "-cl-opt-disable -DR123_FORCE_INLINE(decl)=dec
 LANES = {"optimised": RACES, "unoptimised": UNOPTIMISED + RACES,
          "uninitialised": UNOPTIMISED + RACES + ("--uninitialized",)}
 ML = ["init", "exact", "pruned", "decide", "ml-run", "ml-pruned-run"]
-SEARCH = ["match", "gather", "coherence", "search-runs"]
+SEARCH = ["match", "gather", "coherence", "search-runs", "tensor"]
 #: (lane, case, the case's options): every case in the first two lanes, and as a GPU would launch
 #: them, the cases whose launch shapes depend on the device's type.
 RUNS = ([(lane, case, ()) for lane in ("optimised", "unoptimised") for case in ML + SEARCH]
