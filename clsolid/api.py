@@ -137,8 +137,9 @@ def _seam(image: Any) -> float:
     """The largest seam ratio of the exemplar or exemplars (:func:`clsolid.core.slices.seam_ratio`)."""
     from .colour import luminance
 
-    return max(seam_ratio(luminance(im) if im.ndim == 3 else im)
-               for im in (image.values() if isinstance(image, dict) else [image]))
+    from .exemplar import each
+
+    return max(seam_ratio(luminance(im) if im.ndim == 3 else im) for im in each(image))
 
 
 def _described(image: Any) -> str:
@@ -290,14 +291,14 @@ def synthesize(
 
 def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_output, hook, state):
     """Run (or, from *state*, go on with) a likelihood synthesis and shape its result."""
+    from .exemplar import each
     from .ml.driver import run_ml
 
     scratch = backend.scratch
     on_disk = scratch is not None and scratch.on_disk
     labels = levels_of.labels
     check_host_memory(shape, SCRATCH_FOOTPRINT if on_disk else FOOTPRINT,
-                      sum(exemplar_terms(im.shape, params.neighborhood)
-                          for im in (labels.values() if isinstance(labels, dict) else [labels])))
+                      sum(exemplar_terms(im.shape, params.neighborhood) for im in each(labels)))
     if on_disk:
         check_scratch_space(shape, scratch.root)
     try:

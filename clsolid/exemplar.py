@@ -294,6 +294,13 @@ def load_exemplars(source: Any, *, builtin_size: int = 64,
     return images
 
 
+def each(images: Any) -> list:
+    """The exemplars as a list: one image alone, or every view's of a dict by view (none for None)."""
+    if images is None:
+        return []
+    return list(images.values()) if isinstance(images, dict) else [images]
+
+
 def pooled(images: np.ndarray | dict[str, np.ndarray]) -> np.ndarray:
     """One image, or every view's pixels in one row (their statistics pooled)."""
     if not isinstance(images, dict):

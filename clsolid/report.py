@@ -81,7 +81,7 @@ def like_with_like(exemplar: np.ndarray | dict[str, np.ndarray], sidecar: pathli
         The exemplar to compare with, the ``levels`` to pass to :func:`evaluate`, and a
         line saying what was done ("" when nothing was).
     """
-    from .exemplar import level_map
+    from .exemplar import each, level_map
 
     try:
         written, exact, levels = meta["written"], bool(meta["values_exact"]), meta["params"]["levels"]
@@ -92,7 +92,7 @@ def like_with_like(exemplar: np.ndarray | dict[str, np.ndarray], sidecar: pathli
                 f"{sidecar}: the volume holds level indices; the exemplar is compared as indices too")
     if exact or levels is None:
         return exemplar, None, ""
-    if any(np.ndim(im) == 3 for im in (exemplar.values() if isinstance(exemplar, dict) else [exemplar])):
+    if any(np.ndim(im) == 3 for im in each(exemplar)):
         palette = level_map(exemplar, levels)
         return (palette.to_values(palette.labels), None,
                 f"{sidecar}: a palette of {levels} colours; the exemplar is compared in those colours")

@@ -391,7 +391,7 @@ def run_synth(given: dict[str, Any]) -> int:
     """``clsolid synth`` with the flags *given*; returns the exit status."""
     from ..api import resume, slice_plan, synthesize
     from ..core.slices import preview_depths
-    from ..exemplar import load_exemplars
+    from ..exemplar import each, load_exemplars
     from ..preview import save_preview, save_site_map
     from ..volumeio import check_calibration, check_rgb_output, save_volume
 
@@ -403,8 +403,7 @@ def run_synth(given: dict[str, Any]) -> int:
     check_outputs(cmd, backend)
     image = None if cmd.resume is not None else load_exemplars(_exemplar_source(cmd, settings.origin),
                                                                builtin_size=cmd.builtin_size)
-    exemplars = list(image.values()) if isinstance(image, dict) else [] if image is None else [image]
-    for exemplar in exemplars:
+    for exemplar in each(image):
         check_rgb_output(cmd.output, exemplar)  # now, not after the run
     hooks = [] if cmd.quiet else [render_progress]
     records: list = []
@@ -419,7 +418,7 @@ def run_synth(given: dict[str, Any]) -> int:
         if cmd.resume is not None:
             result = resume(cmd.resume, device=cmd.device, backend=options, progress=report, full_output=True)
         else:
-            colour = any(im.ndim == 3 for im in exemplars)
+            colour = any(im.ndim == 3 for im in each(image))
             result = synthesize(image, cmd.shape, method=cmd.method, rng=cmd.seed, device=cmd.device,
                                 backend=options, progress=report, full_output=True,
                                 site_map=cmd.site_map is not None, channel_axis=-1 if colour else None,
@@ -465,11 +464,11 @@ def _exemplar_source(cmd: Any, origin: dict[str, str]) -> str | dict[str, str]:
 def _write_the_rest(cmd, settings, result, written, voxel_size, unit, voxel_from, records, save_preview,
                     save_site_map, slice_plan, preview_depths) -> list[str]:
     """The sidecar, the preview and the maps; what was written, in words."""
-    from ..exemplar import BUILTINS
+    from ..exemplar import BUILTINS, each
 
     sidecar = _sidecar(written)
     source = _exemplar_source(cmd, settings.origin) if cmd.resume is None else None
-    named = list(source.values()) if isinstance(source, dict) else [source]
+    named = each(source)
     meta = {"volume": str(written), "exemplar": source if source is None or isinstance(source, dict) else str(source),
             "builtin_size": cmd.builtin_size if source is not None and any(n in BUILTINS for n in named) else None,
             "resumed_from": None if cmd.resume is None else str(cmd.resume),
