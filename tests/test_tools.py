@@ -389,3 +389,10 @@ def test_validate_truths_tool_tables_each_truth_method_and_phase(tmp_path, capsy
     assert table.count("| iso2 | kopf |") == 2 and "S2 error z / y / x" in table
     report = json.loads((tmp_path / "iso2-kopf.json").read_text())
     assert report["real"]["ground_truth"]["side"] == 32 and report["generated"]["shape"] == [16, 16, 16]
+
+
+def test_orientation_lengths_prints_a_row_per_run(capsys, device, tool):
+    tool("orientation_lengths").main(["--names", "hrtem", "--methods", "kopf", "--shape", "12", "--set", "scales=2",
+                                      "--set", "neighborhood=5", "--device", device.device.name.strip()[:8]])
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("hrtem")]
+    assert len(rows) == 1 and "front" in rows[0] and "right" in rows[0]

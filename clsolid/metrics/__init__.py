@@ -21,8 +21,8 @@ from .axes import correlation_length, correlation_lengths, lag_correlations, str
 from .evaluate import evaluate
 from .firstorder import first_order_stats, histogram_distance, quantise
 from .fringes import Fringes, fringe_distances, trace_fringes
-from .orientation import (OrientationField, dominant_orientation_deg, orientation_distance,
-                          orientation_histogram, structure_tensor_orientation)
+from .orientation import (OrientationField, dominant_orientation_deg, orientation_correlation_lengths,
+                          orientation_distance, orientation_histogram, structure_tensor_orientation)
 from .patches import patch_distance
 from .solid import (connected_fraction, s2_error, specific_surface_area, tortuosity_factor,
                     two_point_correlation_axes)
@@ -37,7 +37,7 @@ __all__ = [
     "VIEWS", "evaluate", "view_slices", "first_order_stats", "quantise", "histogram_distance",
     "symmetric_kl", "wasserstein_1d", "autocorrelation", "autocorrelation_distance",
     "structure_tensor_orientation", "OrientationField", "orientation_histogram",
-    "dominant_orientation_deg", "orientation_distance", "trace_fringes", "Fringes",
+    "dominant_orientation_deg", "orientation_distance", "orientation_correlation_lengths", "trace_fringes", "Fringes",
     "fringe_distances", "patch_distance", "volume_fractions", "two_point_correlation", "two_point_cluster",
     "lineal_path", "chord_lengths", "mirror_correlation", "mirror_correlations", "mirror_chance", "max_copy_fraction",
     "CopyMatch", "match_counts", "lag_correlations", "correlation_length", "correlation_lengths", "stretch",
