@@ -28,7 +28,7 @@ def test_wheel_contains_the_kernels(tmp_path):
     names = zipfile.ZipFile(wheel).namelist()
     assert {*(f"clsolid/kernels/{name}" for name in SOURCES), "clsolid/kernels/core/init.cl",
             "clsolid/kernels/search/match.cl", "clsolid/kernels/search/gather.cl", "clsolid/search/match.py",
-            "clsolid/search/block.py"} <= set(names)
+            "clsolid/search/block.py", "clsolid/kernels/tensor/tensor.cl", "clsolid/tensor/opencl.py"} <= set(names)
     packages = {str(d.relative_to(ROOT)) for d in (ROOT / "clsolid").rglob("__init__.py")}
     assert packages <= set(names)  # every package listed in pyproject.toml
     assert {f"clsolid/presets/{p.name}" for p in (ROOT / "clsolid" / "presets").glob("*.toml")} <= set(names)
