@@ -136,7 +136,6 @@ def _per_view(image: Any, run_params: MLParams | SearchParams, given: bool):
 def _seam(image: Any) -> float:
     """The largest seam ratio of the exemplar or exemplars (:func:`clsolid.core.slices.seam_ratio`)."""
     from .colour import luminance
-
     from .exemplar import each
 
     return max(seam_ratio(luminance(im) if im.ndim == 3 else im) for im in each(image))
@@ -307,7 +306,7 @@ def _run_ml(levels_of, shape, params, seed, backend, progress, output, full_outp
         # a run of planes at a time: no whole temporary (host memory); with the state on disk
         # the result is there too, in files that go when its arrays do
         store = scratch if on_disk else Scratch()
-        labels = store.apply(np.rint, np.uint8 if levels_of.n_labels <= 256 else np.uint16, vol, kept=True)
+        labels = store.apply(np.rint, levels_of.label_dtype, vol, kept=True)
         if params.despeckle and is_categorical(levels_of.n_labels, levels_of.exact):
             timings["despeckled"] = despeckle(labels)
         values = None
@@ -442,8 +441,7 @@ def _synthesize_search(exemplar, shape, params: SearchParams, rng, device, progr
     vol, timings, use, source = run_search(grey, shape, params, seed, make_matcher, progress, count_sites=site_map,
                                            categorical=categorical, palette=levels_of.features)
     if levels_of.colour or params.keeps_exemplar_values(categorical):  # exact: each voxel is one of the values
-        vol = vol.astype((np.uint8 if levels_of.n_labels <= 256 else np.uint16) if levels_of.colour
-                         else levels_of.values.dtype)  # colour: palette labels
+        vol = vol.astype(levels_of.label_dtype if levels_of.colour else levels_of.values.dtype)  # colour: labels
         if params.despeckle and categorical and method != "chen-wang":  # chen-wang's voxels stay copies (its map)
             timings["despeckled"] = despeckle(vol)
     labels = None

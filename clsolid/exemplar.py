@@ -397,6 +397,11 @@ class LevelMap:
         """How many labels there are (``values``' rows)."""
         return len(self.values)
 
+    @property
+    def label_dtype(self) -> type:
+        """The dtype a volume of these labels is given: uint8, or uint16 above 256 labels."""
+        return np.uint8 if self.n_labels <= 256 else np.uint16
+
     def to_values(self, labels: np.ndarray | dict[str, np.ndarray]) -> np.ndarray | dict[str, np.ndarray]:
         """Map label indices back to the exemplar's values (and dtype); a dict view by view."""
         if isinstance(labels, dict):

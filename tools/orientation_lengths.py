@@ -24,16 +24,8 @@ import numpy as np
 import clsolid
 from clsolid import metrics
 from clsolid.api import inserted_slices
-from clsolid.core.views import DEPTH_AXIS, view_set
+from clsolid.core.views import view_set
 from clsolid.gallery import gallery_exemplar
-from clsolid.preview import view_slice
-
-
-def view_slices(volume: np.ndarray, view: str, skip: Any = ()) -> np.ndarray:
-    """The slices of *view*, ``(n, rows, cols)``, oriented as the view (without the depths *skip*)."""
-    depth = volume.shape[DEPTH_AXIS[view]]
-    keep = [d for d in range(depth) if d not in set(np.asarray(skip).tolist())]
-    return np.stack([view_slice(volume, view, d) for d in keep]).astype(np.float64)
 
 
 def measure(exemplar: np.ndarray, volume: np.ndarray, views: tuple[str, ...], skip: dict) -> dict[str, Any]:
@@ -41,7 +33,8 @@ def measure(exemplar: np.ndarray, volume: np.ndarray, views: tuple[str, ...], sk
     ex = metrics.orientation_correlation_lengths(exemplar.astype(np.float64))
     out: dict[str, Any] = {"exemplar": ex}
     for view in views:
-        got = metrics.orientation_correlation_lengths(view_slices(volume, view, skip.get(view, ())), periodic=True)
+        got = metrics.orientation_correlation_lengths(metrics.view_slices(volume, view, exclude=skip.get(view, ())),
+                                                      periodic=True)
         out[view] = {"lengths": got, "ratios": tuple(g / e for g, e in zip(got, ex))}
     return out
 

@@ -33,7 +33,7 @@ from .codes import phase_codes
 from .match import candidate_sets
 from .params import SearchParams
 from .palette import Palette, colour_pyramid
-from .pyramid import gaussian_pyramid
+from .pyramid import gaussian_pyramid, upsampled
 from .specify import specify_histogram
 
 #: Each method's rule for one conflict-free set: ``update(level, vol, coarse, voxels) -> searches``.
@@ -289,8 +289,7 @@ def _start(exemplar: np.ndarray, shape: tuple[int, int, int], coarse: np.ndarray
     odd), or noise drawn from the level's exemplar pixels (always at the coarsest level)."""
     if coarse is None or init == "noise":
         return np.random.default_rng([seed, level]).choice(exemplar.ravel(), size=shape)
-    idx = np.ix_(*[(np.arange(n) // 2) % m for n, m in zip(shape, coarse.shape)])
-    return coarse[idx].astype(np.float64)
+    return upsampled(coarse, shape)
 
 
 #: Rough cost of a finer level against the one before it, by the two levels' searches: 8x the

@@ -180,16 +180,11 @@ class Level:
             site, least = self.view_matchers[view].best(
                 self.queries(view, voxels, vol, coarse) if queries is None else queries, weights)
             return site + self.view_starts[view], least
-        if self.colour is not None:  # queries of colours, gathered on the host
-            if queries is None:
-                queries = self.queries(view, voxels, vol, coarse)
-            if self.coherence is not None and not self.exhaustive:
-                return self.coherence.best(self.matcher, view, voxels, queries, weights)
-            site, least = self.matcher.best(queries, weights)
-            if self.coherence is not None:
-                self.coherence.record(view, voxels, site)
-            return site, least
         if self.coherence is not None and not self.exhaustive:
+            if self.colour is not None:  # colours: the queries gathered and encoded on the host
+                return self.coherence.best(self.matcher, view, voxels,
+                                           self.queries(view, voxels, vol, coarse) if queries is None else queries,
+                                           weights)
             return self.coherence.search(self.matcher, view, voxels, self.searched(vol), coarse, k, weights, queries,
                                          self.block)
         projection = self.projection(weights)

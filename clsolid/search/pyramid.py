@@ -18,6 +18,14 @@ def _blur(img: np.ndarray, mode: str) -> np.ndarray:
     return out
 
 
+def upsampled(coarse: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """The coarser level *coarse* up-sampled 2:1 on each of the leading axes to *shape*
+    (each value repeated, wrapping where a side is odd), float64; trailing axes of *coarse*
+    (a tensor's components) are kept."""
+    idx = np.ix_(*[(np.arange(n) // 2) % m for n, m in zip(shape, coarse.shape)])
+    return coarse[idx].astype(np.float64)
+
+
 def gaussian_pyramid(exemplar: np.ndarray, levels: int) -> list[np.ndarray]:
     """``levels`` images, finest first: level l+1 is level l filtered and decimated 2:1.
 

@@ -33,7 +33,7 @@ from ..core.schedule import colour_set, set_count, set_order
 from ..errors import InputError
 from ..tensor.dissimilarity import check_metric, neighbourhood_dissimilarity
 from .features import centre_weights, exemplar_features, voxel_features
-from .pyramid import gaussian_pyramid
+from .pyramid import gaussian_pyramid, upsampled
 
 SCHEMES = ("random", "causal")
 
@@ -151,16 +151,15 @@ def synthesize_field(exemplar_field: np.ndarray, shape: tuple[int, int], *, neig
         if coarse is None:  # noise drawn from the exemplar's level
             flat = pyr[level].reshape(-1, 3)
             out = flat[rng.integers(0, flat.shape[0], size[0] * size[1])].reshape(size + (3,))
-        else:  # the coarser result up-sampled
-            out = coarse[np.ix_((np.arange(size[0]) // 2) % coarse.shape[0], (np.arange(size[1]) // 2) % coarse.shape[1])]
+        else:
+            out = upsampled(coarse, size)
         out = np.ascontiguousarray(out)
         flat_out = out.reshape(-1, 3)  # a view: the queries read what the passes write
+        waves = _waves(size, k // 2) if scheme == "causal" else None  # the same every pass
+        n_sets = set_count((1,) + size, k // 2)
         for it in range(1, iterations + 1):
-            if scheme == "causal":
-                groups = _waves(size, k // 2)
-            else:
-                n_sets = set_count((1,) + size, k // 2)
-                groups = [colour_set((1,) + size, n_sets, c) for c in set_order(n_sets, seed, level, it)]
+            groups = waves if waves is not None else (colour_set((1,) + size, n_sets, c)
+                                                     for c in set_order(n_sets, seed, level, it))
             for pixels in groups:
                 site, _ = matcher.best(pixel_queries(out, coarse if parent else None, pixels, k))
                 flat_out[pixels] = centres[site]

@@ -37,6 +37,12 @@ def gaussian_taps(sigma: float, derivative: bool = False) -> np.ndarray:
     return g / g.sum()
 
 
+def check_radius(n: int, r: int) -> None:
+    """Refuse a filter of radius *r* on a side of *n* pixels: one mirroring must reach past it."""
+    if r >= n:
+        raise InputError(f"a {n}-pixel side is too short for a filter of radius {r}: use smaller sigmas")
+
+
 def convolve_axis(image: np.ndarray, taps: np.ndarray, axis: int, boundary: str, odd: bool = False) -> np.ndarray:
     """``sum_t taps[t] image[i - (t - r)]`` along *axis* (a convolution), the image extended by
     *boundary*. With *odd* taps (``taps[r + t] = -taps[r - t]``, a derivative) the sum is taken
@@ -44,8 +50,7 @@ def convolve_axis(image: np.ndarray, taps: np.ndarray, axis: int, boundary: str,
     gradient is exactly 0, not rounding noise whose tensor would have any orientation."""
     r = taps.size // 2
     n = image.shape[axis]
-    if r >= n:
-        raise InputError(f"a {n}-pixel side is too short for a filter of radius {r}: use smaller sigmas")
+    check_radius(n, r)
     pad = [(r, r) if a == axis else (0, 0) for a in range(image.ndim)]
     padded = np.pad(np.asarray(image, np.float64), pad, mode=boundary)
     out = np.zeros(image.shape, np.float64)

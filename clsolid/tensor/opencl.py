@@ -13,7 +13,7 @@ from ..core.device import Device
 from ..core.launch import launch
 from ..errors import InputError
 from .dissimilarity import METRICS, check_metric
-from .field import BOUNDARIES, _check, gaussian_taps
+from .field import BOUNDARIES, _check, check_radius, gaussian_taps
 
 _FILE = "tensor/tensor.cl"
 #: Work-items a group, as the kernels ask (the device may allow fewer).
@@ -49,8 +49,7 @@ def structure_tensor(device: Device, image: np.ndarray, grad_sigma: float = 1.0,
     taps = {name: gaussian_taps(sigma, deriv) for name, sigma, deriv in
             (("g", grad_sigma, False), ("dg", grad_sigma, True), ("w", window_sigma, False))}
     for t in taps.values():
-        if t.size // 2 >= min(h, w):
-            raise InputError(f"a {h}x{w} image is too small for a filter of radius {t.size // 2}: use smaller sigmas")
+        check_radius(min(h, w), t.size // 2)
     tap_bufs = {name: _buffer(device, t) for name, t in taps.items()}
     src = _buffer(device, img)
     n = h * w
